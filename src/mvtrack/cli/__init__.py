@@ -1,0 +1,66 @@
+"""The ``mvtrack`` command line (Typer).
+
+Every command lives in its own module and registers itself here. User errors
+(:class:`~mvtrack.errors.InputError`, ``ValueError``, ``OSError``) and usage errors end in one
+line ``error: ...`` on stderr and exit status 2; Ctrl-C ends with status 130.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from mvtrack.cli import demo, evaluate, experiment, simulate, track
+
+app = typer.Typer(
+    name="mvtrack",
+    help="Track many moving objects in fixed-camera video, and compare predictors honestly.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+
+
+@app.callback()
+def _root() -> None:
+    """Track many moving objects in fixed-camera video, and compare predictors honestly."""
+
+
+for _module in (demo, track, evaluate, simulate, experiment):
+    _module.register(app)
+
+# Typer ships its own copy of Click; find its exception classes through a public name.
+_CLICK_ERROR: type[Exception] = next(
+    c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException"
+)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``mvtrack`` console script; returns the exit status."""
+    command = typer.main.get_command(app)
+    try:
+        result = command.main(args=argv, prog_name="mvtrack", standalone_mode=False)
+    except _CLICK_ERROR as exc:
+        print(f"error: {exc.format_message()}", file=sys.stderr)  # type: ignore[attr-defined]
+        return 2
+    except KeyboardInterrupt:
+        print("error: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:
+        if type(exc).__name__ == "Exit":
+            return int(getattr(exc, "exit_code", 0))
+        if type(exc).__name__ == "Abort":
+            print("error: interrupted", file=sys.stderr)
+            return 130
+        if isinstance(exc, (ValueError, OSError)):
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        raise
+    return int(result) if isinstance(result, int) else 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

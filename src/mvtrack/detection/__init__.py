@@ -1,0 +1,1 @@
+"""Detection front ends: disturbance map, frame differencing, MOG2, template matching, parts."""

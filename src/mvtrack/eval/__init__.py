@@ -1,0 +1,1 @@
+"""Evaluation: MOTA, IDF1 (motmetrics) and HOTA (TrackEval)."""

@@ -1,0 +1,1 @@
+"""Predictors: batched linear Kalman filters, the RLS adaptive predictor, the structured KF."""

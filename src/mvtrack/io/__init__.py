@@ -1,0 +1,1 @@
+"""Input and output: video frames, MOTChallenge text files, atomic writes."""

@@ -1,0 +1,1 @@
+"""Simulated scenes with ground truth: trajectories, detections and rendered video."""

@@ -1,0 +1,1 @@
+"""The multi-target tracker: predict, gate, assign, update, life cycle."""

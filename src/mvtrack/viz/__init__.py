@@ -1,0 +1,1 @@
+"""Drawings: annotated video frames and plots."""
