@@ -152,7 +152,7 @@ def test_duplicate_id_in_a_frame_is_rejected(tmp_path: Path) -> None:
 
 def test_missing_file_is_named(tmp_path: Path) -> None:
     path = tmp_path / "nope.txt"
-    with pytest.raises(InputError, match="nope.txt: no such file"):
+    with pytest.raises(InputError, match=r"nope\.txt: no such file"):
         read_detections(path)
 
 
