@@ -1,0 +1,190 @@
+"""Settings of a video tracking run, from a TOML file (``--config FILE.toml``) and the CLI.
+
+The file has four optional tables; every key is optional and the command-line options win
+over the file::
+
+    [tracker]                 # preset, then any field of mvtrack.tracking.TrackerConfig
+    preset = "paper1"         # "default", "paper1" or "paper2"
+    predictor = "rls"
+    gate = 10.0
+
+    [detector]                # the front end, then its parameters
+    name = "disturbance-map"
+    threshold = 25
+
+    [templates]               # template matching for stopped vehicles (paper 1 §1.1 step 3)
+    enabled = true            # then any parameter of mvtrack.detection.template.TemplateBank
+
+    [video]                   # the annotated MP4
+    write = true
+    trail = 30                # frames of trail behind each track
+    gates = true              # draw the gate regions
+
+An unknown table or key is an :class:`~mvtrack.errors.InputError` naming the file and key, so a
+misspelt setting never passes silently. Tracker keys are checked against ``TrackerConfig``'s
+fields, detector and template keys against the constructor of the front end / template bank
+when those are built (:mod:`mvtrack.pipeline`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mvtrack.errors import InputError
+
+#: the detector front ends a user may name
+DETECTORS: tuple[str, ...] = ("disturbance-map", "frame-diff", "mog2")
+
+_TABLES: dict[str, tuple[str, ...]] = {
+    "tracker": (),  # checked against TrackerConfig fields (plus "preset")
+    "detector": (),  # "name" plus the detector's parameters
+    "templates": (),  # "enabled" plus TemplateBank parameters
+    "video": ("write", "trail", "gates"),
+}
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """Everything ``mvtrack track`` needs besides the video.
+
+    Attributes
+    ----------
+    tracker : dict
+        ``preset`` (optional) and overrides of ``TrackerConfig`` fields.
+    detector : str
+        Front-end name (one of :data:`DETECTORS`).
+    detector_params : dict
+        Keyword arguments of the front end.
+    templates : bool
+        Keep a template bank and rescue stopped vehicles by template matching.
+    template_params : dict
+        Keyword arguments of the template bank.
+    video : bool
+        Write the annotated MP4.
+    trail : int
+        Frames of trail drawn behind each track.
+    gates : bool
+        Draw the gate regions in the annotated video.
+    """
+
+    tracker: dict[str, Any] = field(default_factory=dict)
+    detector: str = "disturbance-map"
+    detector_params: dict[str, Any] = field(default_factory=dict)
+    templates: bool = True
+    template_params: dict[str, Any] = field(default_factory=dict)
+    video: bool = True
+    trail: int = 30
+    gates: bool = True
+
+    def with_overrides(self, **tracker_overrides: Any) -> RunSettings:
+        """A copy with the non-None ``tracker_overrides`` (CLI options) applied."""
+        tracker = dict(self.tracker)
+        tracker.update({k: v for k, v in tracker_overrides.items() if v is not None})
+        return dataclasses.replace(self, tracker=tracker)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready form (for ``summary.json``)."""
+        return dataclasses.asdict(self)
+
+
+def _tracker_fields() -> set[str] | None:
+    """Field names of ``TrackerConfig``, or None when the tracker is not importable."""
+    try:
+        from mvtrack.tracking import TrackerConfig
+    except ImportError:  # pragma: no cover - only while the tracker is missing
+        return None
+    return {f.name for f in dataclasses.fields(TrackerConfig)}
+
+
+def _unknown(path: Path, key: str, known: set[str] | tuple[str, ...]) -> InputError:
+    return InputError(
+        f"{path}: unknown key {key!r} (known: {', '.join(sorted(known))})"
+    )
+
+
+def _check_type(path: Path, key: str, value: Any, kind: type | tuple[type, ...]) -> None:
+    if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
+        names = kind.__name__ if isinstance(kind, type) else "/".join(k.__name__ for k in kind)
+        raise InputError(f"{path}: {key} must be {names}, got {value!r}")
+
+
+def load_config(path: str | os.PathLike[str]) -> RunSettings:
+    """Read a TOML settings file.
+
+    Raises
+    ------
+    InputError
+        If the file is missing or not valid TOML, or holds an unknown table or key or a value of
+        the wrong type. The message is one line naming the file and the key.
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise InputError(f"config file not found: {path}") from None
+    except IsADirectoryError:
+        raise InputError(f"config path is a folder, not a file: {path}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{path}: invalid TOML: {str(exc).splitlines()[0]}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read config file {path}: {exc}") from None
+
+    for key, value in data.items():
+        if key not in _TABLES:
+            raise _unknown(path, key, tuple(_TABLES))
+        if not isinstance(value, dict):
+            raise InputError(f"{path}: {key} must be a table ([{key}]), got {value!r}")
+
+    tracker = dict(data.get("tracker", {}))
+    known = _tracker_fields()
+    if known is not None:
+        for key in tracker:
+            if key != "preset" and key not in known:
+                raise _unknown(path, f"tracker.{key}", known | {"preset"})
+    if "preset" in tracker:
+        _check_type(path, "tracker.preset", tracker["preset"], str)
+    if "gate" in tracker:
+        _check_type(path, "tracker.gate", tracker["gate"], (int, float))
+
+    detector_table = dict(data.get("detector", {}))
+    name = detector_table.pop("name", RunSettings.detector)
+    _check_type(path, "detector.name", name, str)
+    if name not in DETECTORS:
+        raise InputError(
+            f"{path}: detector.name {name!r} is not a detector (choose one of: "
+            f"{', '.join(DETECTORS)})"
+        )
+
+    template_table = dict(data.get("templates", {}))
+    enabled = template_table.pop("enabled", True)
+    _check_type(path, "templates.enabled", enabled, bool)
+
+    video_table = data.get("video", {})
+    for key in video_table:
+        if key not in _TABLES["video"]:
+            raise _unknown(path, f"video.{key}", _TABLES["video"])
+    write = video_table.get("write", True)
+    trail = video_table.get("trail", RunSettings.trail)
+    gates = video_table.get("gates", True)
+    _check_type(path, "video.write", write, bool)
+    _check_type(path, "video.trail", trail, int)
+    _check_type(path, "video.gates", gates, bool)
+    if trail < 2:
+        raise InputError(f"{path}: video.trail must be at least 2, got {trail}")
+
+    return RunSettings(
+        tracker=tracker,
+        detector=name,
+        detector_params=detector_table,
+        templates=enabled,
+        template_params=template_table,
+        video=write,
+        trail=trail,
+        gates=gates,
+    )

@@ -1,0 +1,336 @@
+"""Overlay tracks on video frames: boxes, IDs, life-cycle state, trails and gate regions.
+
+Everything here works on whole frames of tracks at once: box outlines, gate outlines and trails
+are built as arrays of polygon vertices and handed to one :func:`cv2.polylines` call per
+colour; only the ID labels need one :func:`cv2.putText` call each.
+
+The gate of a track is the region ``{z : (z - c)ᵀ C⁻¹ (z - c) ≤ r²}`` around its predicted
+position ``c``: a circle of radius ``r`` for the Euclidean gate (eq. 8 of paper 2, circular mask
+of paper 1 §1.1) with ``C = I``, an axis-aligned ellipse for the uncoupled gate (eq. 9 of paper 2,
+``C = diag(P̄x, P̄y)``), the rotated coupled region (SPEC §2.3) or the Mahalanobis χ² gate
+(``C = S``). :func:`gate_ellipses` turns ``(C, r²)`` into semi-axes and an angle.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from mvtrack.types import TrackFrame, TrackState
+
+FloatArray = NDArray[np.float64]
+
+#: BGR colour of each life-cycle state
+STATE_COLORS: dict[int, tuple[int, int, int]] = {
+    int(TrackState.TENTATIVE): (160, 160, 160),  # grey
+    int(TrackState.CONFIRMED): (60, 200, 60),  # green
+    int(TrackState.COASTING): (0, 165, 255),  # orange
+    int(TrackState.STOPPED): (255, 80, 40),  # blue
+}
+#: short label of each state, drawn after the ID
+STATE_LABELS: dict[int, str] = {
+    int(TrackState.TENTATIVE): "t",
+    int(TrackState.CONFIRMED): "",
+    int(TrackState.COASTING): "c",
+    int(TrackState.STOPPED): "s",
+}
+#: colour of the gate outlines (BGR, yellow)
+GATE_COLOR: tuple[int, int, int] = (0, 230, 255)
+#: palette of trail colours, chosen by ``track_id % len(TRAIL_PALETTE)``
+TRAIL_PALETTE: NDArray[np.uint8] = np.array(
+    [
+        [230, 25, 75], [60, 180, 75], [255, 225, 25], [0, 130, 200], [245, 130, 48],
+        [145, 30, 180], [70, 240, 240], [240, 50, 230], [210, 245, 60], [250, 190, 212],
+        [0, 128, 128], [170, 110, 40],
+    ],
+    dtype=np.uint8,
+)[:, ::-1]  # RGB -> BGR
+
+
+def gate_ellipses(cov: FloatArray, r2: float | FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Semi-axes and orientation of the gate ellipses ``Δᵀ C⁻¹ Δ ≤ r²``.
+
+    For a symmetric positive definite 2×2 matrix ``C = [[a, b], [b, d]]`` the eigenvalues are
+
+    .. math:: \\lambda_{1,2} = \\tfrac{a+d}{2} \\pm \\sqrt{\\left(\\tfrac{a-d}{2}\\right)^2 + b^2}
+
+    and the major axis points at ``θ = ½ atan2(2b, a − d)``; the semi-axes are
+    ``sqrt(r² λ)``. Closed form, so the whole batch is a handful of array operations.
+
+    Parameters
+    ----------
+    cov : (K, 2, 2) float
+        Shape matrices ``C`` (``I`` for a circle, ``diag(P̄x, P̄y)`` for eq. (9) of paper 2,
+        the coupled covariance of SPEC §2.3, or the innovation covariance ``S``).
+    r2 : float or (K,) float
+        Squared gate threshold (px² for a circle with ``C = I``; χ² value otherwise).
+
+    Returns
+    -------
+    axes : (K, 2) float
+        Semi-major and semi-minor axis in pixels.
+    angle : (K,) float
+        Angle of the major axis in degrees, from +x towards +y (image coordinates).
+    """
+    cov = np.asarray(cov, dtype=np.float64).reshape(-1, 2, 2)
+    a, b, d = cov[:, 0, 0], 0.5 * (cov[:, 0, 1] + cov[:, 1, 0]), cov[:, 1, 1]
+    mean = 0.5 * (a + d)
+    rad = np.sqrt((0.5 * (a - d)) ** 2 + b**2)
+    lam = np.stack([mean + rad, np.maximum(mean - rad, 0.0)], axis=1)
+    axes = np.sqrt(np.asarray(r2, dtype=np.float64).reshape(-1, 1) * lam)
+    angle = np.degrees(0.5 * np.arctan2(2.0 * b, a - d))
+    return axes, angle
+
+
+def gate_shapes(
+    distance: str,
+    xy: FloatArray,
+    cov: FloatArray,
+    S: FloatArray,
+    velocity: FloatArray,
+    gate: float,
+    *,
+    rho: float = 2.0,
+    min_speed: float = 0.5,
+    use_innovation: bool | None = None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The gate region of each track as ``(centre, C, r²)`` for :func:`draw_gates`.
+
+    Mirrors the distances of :mod:`mvtrack.association.distances`:
+
+    - ``euclidean`` (eq. 8 of paper 2, paper 1's circular mask): ``C = I``, ``r² = gate`` (px²);
+    - ``uncoupled`` (eq. 9 of paper 2): ``C = diag(P̄x, P̄y)``;
+    - ``coupled`` (SPEC §2.3): ``C = R_θ diag(ρ² σ², σ²) R_θᵀ`` with σ² = (P̄x + P̄y)/2 and θ
+      the direction of the predicted velocity; eq. (9)'s ellipse where ``|v̄| < min_speed``;
+    - ``mahalanobis``: ``C = S`` (or P̄ when ``use_innovation`` is False).
+
+    Other distances (``iou``, ``coupled-literal``, whose region is not an ellipse about the
+    prediction, E2.7) give NaN matrices, which :func:`draw_gates` skips.
+
+    Parameters
+    ----------
+    distance : str
+        Distance name.
+    xy, cov, S, velocity : arrays
+        Predicted positions (K, 2), P̄ (K, 2, 2), S (K, 2, 2), velocity (K, 2) px/frame.
+    gate : float
+        Gate on the squared distance.
+    rho, min_speed, use_innovation
+        As in the distance functions (``use_innovation`` defaults to False except for
+        ``mahalanobis``).
+    """
+    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    k = xy.shape[0]
+    cov = np.asarray(cov, dtype=np.float64).reshape(k, 2, 2)
+    S = np.asarray(S, dtype=np.float64).reshape(k, 2, 2)
+    v = np.asarray(velocity, dtype=np.float64).reshape(k, 2)
+    r2 = np.full(k, float(gate))
+    if use_innovation is None:
+        use_innovation = distance == "mahalanobis"
+    base = S if use_innovation else cov
+    var = np.stack([base[:, 0, 0], base[:, 1, 1]], axis=1)
+    diag = np.zeros((k, 2, 2))
+    diag[:, 0, 0], diag[:, 1, 1] = var[:, 0], var[:, 1]
+    if distance == "euclidean":
+        shape = np.broadcast_to(np.eye(2), (k, 2, 2)).copy()
+    elif distance == "uncoupled":
+        shape = diag  # eq. (9) of paper 2
+    elif distance == "coupled":
+        s = np.hypot(v[:, 0], v[:, 1])
+        moving = s >= min_speed
+        s_safe = np.where(moving, s, 1.0)
+        c, sn = v[:, 0] / s_safe, v[:, 1] / s_safe
+        rot = np.stack([np.stack([c, -sn], 1), np.stack([sn, c], 1)], 1)  # columns: ∥, ⊥
+        sig2 = var.mean(axis=1)  # σ⊥² = (P̄x + P̄y)/2, SPEC §2.3 [R]
+        lam = np.zeros((k, 2, 2))
+        lam[:, 0, 0], lam[:, 1, 1] = rho**2 * sig2, sig2
+        rotated = rot @ lam @ rot.transpose(0, 2, 1)  # SPEC §2.3: R_θ diag(σ∥², σ⊥²) R_θᵀ
+        shape = np.where(moving[:, None, None], rotated, diag)
+    elif distance == "mahalanobis":
+        shape = base.copy()
+    else:
+        shape = np.full((k, 2, 2), np.nan)
+    return xy, shape, r2
+
+
+def ellipse_points(
+    center: FloatArray, axes: FloatArray, angle_deg: FloatArray, n_points: int = 36
+) -> FloatArray:
+    """Points (K, n_points, 2) on ellipses with semi-axes ``axes`` turned by ``angle_deg``."""
+    center = np.asarray(center, dtype=np.float64).reshape(-1, 2)
+    t = np.linspace(0.0, 2.0 * np.pi, n_points, endpoint=False)
+    th = np.radians(np.asarray(angle_deg, dtype=np.float64)).reshape(-1, 1)
+    ca, sa = np.cos(th), np.sin(th)
+    u = axes[:, :1] * np.cos(t)  # along the major axis, (K, P)
+    v = axes[:, 1:] * np.sin(t)
+    x = center[:, :1] + ca * u - sa * v
+    y = center[:, 1:] + sa * u + ca * v
+    return np.stack([x, y], axis=2)
+
+
+def ellipse_polygons(
+    center: FloatArray, axes: FloatArray, angle_deg: FloatArray, n_points: int = 36
+) -> NDArray[np.int32]:
+    """Vertices (K, n_points, 2) of ellipses in integer pixels, for :func:`cv2.polylines`."""
+    return np.rint(ellipse_points(center, axes, angle_deg, n_points)).astype(np.int32)
+
+
+def box_polygons(xy: FloatArray, wh: FloatArray) -> NDArray[np.int32]:
+    """Vertices (K, 4, 2) of axis-aligned boxes centred on ``xy`` with size ``wh``."""
+    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    half = np.asarray(wh, dtype=np.float64).reshape(-1, 2) / 2.0
+    corners = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    return np.rint(xy[:, None, :] + corners[None] * half[:, None, :]).astype(np.int32)
+
+
+def _finite_rows(*arrays: FloatArray) -> NDArray[np.bool_]:
+    ok = np.ones(arrays[0].shape[0], dtype=bool)
+    for arr in arrays:
+        ok &= np.isfinite(arr.reshape(arr.shape[0], -1)).all(axis=1)
+    return ok
+
+
+def draw_gates(
+    image: NDArray[np.uint8],
+    center: FloatArray,
+    cov: FloatArray,
+    r2: float | FloatArray,
+    color: tuple[int, int, int] = GATE_COLOR,
+    thickness: int = 1,
+) -> NDArray[np.uint8]:
+    """Draw the gate regions ``(z − c)ᵀ C⁻¹ (z − c) ≤ r²`` in place; returns ``image``.
+
+    A circle of radius ``g`` is ``cov = I``, ``r2 = g²``.
+    """
+    center = np.asarray(center, dtype=np.float64).reshape(-1, 2)
+    cov = np.asarray(cov, dtype=np.float64).reshape(-1, 2, 2)
+    r2_arr = np.broadcast_to(np.asarray(r2, dtype=np.float64), (center.shape[0],))
+    ok = _finite_rows(center, cov) & np.isfinite(r2_arr)
+    if not ok.any():
+        return image
+    axes, angle = gate_ellipses(cov[ok], r2_arr[ok])
+    polys = ellipse_polygons(center[ok], axes, angle)
+    cv2.polylines(image, list(polys), True, color, thickness, cv2.LINE_AA)
+    return image
+
+
+def draw_boxes(
+    image: NDArray[np.uint8],
+    tracks: TrackFrame,
+    thickness: int = 2,
+    labels: bool = True,
+) -> NDArray[np.uint8]:
+    """Draw each track's box in its state colour, and ``ID`` (+ state letter) above it."""
+    if len(tracks) == 0:
+        return image
+    xy, wh = tracks.filtered_xy, tracks.wh
+    ok = _finite_rows(xy, wh)
+    polys = box_polygons(xy, wh)
+    for state, color in STATE_COLORS.items():
+        sel = ok & (tracks.state == state)
+        if sel.any():
+            cv2.polylines(image, list(polys[sel]), True, color, thickness, cv2.LINE_8)
+    if labels:
+        top_left = polys[:, 0, :]
+        for i in np.flatnonzero(ok):  # one putText per label: OpenCV draws text one by one
+            state = int(tracks.state[i])
+            text = f"{int(tracks.track_id[i])}{STATE_LABELS.get(state, '?')}"
+            org = (int(top_left[i, 0]), int(max(top_left[i, 1] - 3, 10)))
+            cv2.putText(image, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.4,
+                        STATE_COLORS.get(state, (255, 255, 255)), 1, cv2.LINE_AA)
+    return image
+
+
+class TrailBuffer:
+    """The last ``length`` frames of tracks, turned into one polyline per track ID.
+
+    Keeps whole :class:`TrackFrame` rows (no per-track objects); :meth:`polylines` stacks them
+    and splits by ID with a sort.
+    """
+
+    def __init__(self, length: int = 30) -> None:
+        if length < 2:
+            raise ValueError(f"trail length must be at least 2, got {length}")
+        self.length = length
+        self._ids: deque[NDArray[np.int64]] = deque(maxlen=length)
+        self._xy: deque[FloatArray] = deque(maxlen=length)
+
+    def push(self, tracks: TrackFrame) -> None:
+        """Add one frame's tracks (their filtered positions)."""
+        self._ids.append(np.asarray(tracks.track_id, dtype=np.int64))
+        self._xy.append(np.asarray(tracks.filtered_xy, dtype=np.float64).reshape(-1, 2))
+
+    def polylines(self) -> tuple[NDArray[np.int64], list[NDArray[np.int32]]]:
+        """Track IDs with at least two points, and each one's points (oldest first)."""
+        if not self._ids:
+            return np.zeros(0, dtype=np.int64), []
+        ids = np.concatenate(list(self._ids))
+        xy = np.concatenate(list(self._xy))
+        age = np.concatenate([np.full(len(a), k) for k, a in enumerate(self._ids)])
+        ok = np.isfinite(xy).all(axis=1)
+        ids, xy, age = ids[ok], xy[ok], age[ok]
+        order = np.lexsort((age, ids))
+        ids, xy = ids[order], xy[order]
+        uniq, start, count = np.unique(ids, return_index=True, return_counts=True)
+        keep = count >= 2
+        pts = np.rint(xy).astype(np.int32)
+        lines = np.split(pts, start[1:])
+        return uniq[keep], [line for line, k in zip(lines, keep, strict=True) if k]
+
+
+def draw_trails(
+    image: NDArray[np.uint8], trails: TrailBuffer, thickness: int = 1
+) -> NDArray[np.uint8]:
+    """Draw each track's recent path in its palette colour (one polylines call per colour)."""
+    ids, lines = trails.polylines()
+    if not lines:
+        return image
+    colour_idx = ids % len(TRAIL_PALETTE)
+    for c in np.unique(colour_idx):
+        sel = [lines[i] for i in np.flatnonzero(colour_idx == c)]
+        color = tuple(int(v) for v in TRAIL_PALETTE[c])
+        cv2.polylines(image, sel, False, color, thickness, cv2.LINE_AA)
+    return image
+
+
+def annotate_frame(
+    frame: NDArray[np.uint8],
+    tracks: TrackFrame,
+    *,
+    trails: TrailBuffer | None = None,
+    gate_center: FloatArray | None = None,
+    gate_cov: FloatArray | None = None,
+    gate_r2: float | FloatArray | None = None,
+    text: Sequence[str] = (),
+) -> NDArray[np.uint8]:
+    """A copy of ``frame`` (BGR or grey) with trails, gates, boxes, IDs and a text header.
+
+    Parameters
+    ----------
+    frame : (H, W, 3) or (H, W) uint8
+        The video frame.
+    tracks : TrackFrame
+        The tracker's output for this frame.
+    trails : TrailBuffer, optional
+        Recent positions (push ``tracks`` into it before calling).
+    gate_center, gate_cov, gate_r2 : optional
+        Gate regions to draw (see :func:`draw_gates`); skipped when ``gate_cov`` is None.
+    text : sequence of str
+        Lines written at the top left (frame number, settings).
+    """
+    img = frame.copy() if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+    if trails is not None:
+        draw_trails(img, trails)
+    if gate_cov is not None and gate_center is not None and gate_r2 is not None:
+        draw_gates(img, gate_center, gate_cov, gate_r2)
+    draw_boxes(img, tracks)
+    for k, line in enumerate(text):
+        org = (4, 14 + 14 * k)
+        cv2.putText(img, line, org, cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(img, line, org, cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1,
+                    cv2.LINE_AA)
+    return img

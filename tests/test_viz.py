@@ -1,0 +1,176 @@
+"""Drawings: gate ellipses land where the gate's boundary is, boxes carry their state colour."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mvtrack.types import TrackFrame, TrackState
+from mvtrack.viz.annotate import (
+    GATE_COLOR,
+    STATE_COLORS,
+    TrailBuffer,
+    annotate_frame,
+    draw_boxes,
+    draw_gates,
+    ellipse_points,
+    gate_ellipses,
+    gate_shapes,
+)
+from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
+
+
+def _frame(k: int, ids, states, xy, wh=(10.0, 8.0)) -> TrackFrame:
+    n = len(ids)
+    xy = np.asarray(xy, dtype=float).reshape(n, 2)
+    return TrackFrame(
+        frame=k,
+        track_id=np.asarray(ids, dtype=np.int64),
+        state=np.asarray(states, dtype=np.int64),
+        det_index=np.arange(n, dtype=np.int64),
+        measured_xy=xy.copy(),
+        filtered_xy=xy.copy(),
+        predicted_xy=xy.copy(),
+        wh=np.broadcast_to(np.asarray(wh, float), (n, 2)).copy(),
+        velocity=np.zeros((n, 2)),
+    )
+
+
+def _lit(img: np.ndarray) -> np.ndarray:
+    return img.any(axis=2)
+
+
+def test_gate_ellipses_match_eigendecomposition() -> None:
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(50, 2, 2))
+    cov = a @ a.transpose(0, 2, 1) + 0.1 * np.eye(2)
+    axes, angle = gate_ellipses(cov, 9.21)
+    lam, vec = np.linalg.eigh(cov)  # ascending
+    np.testing.assert_allclose(axes[:, 0], np.sqrt(9.21 * lam[:, 1]), rtol=1e-10)
+    np.testing.assert_allclose(axes[:, 1], np.sqrt(9.21 * lam[:, 0]), rtol=1e-10)
+    major = vec[:, :, 1]
+    direction = np.stack([np.cos(np.radians(angle)), np.sin(np.radians(angle))], axis=1)
+    np.testing.assert_allclose(np.abs((major * direction).sum(axis=1)), 1.0, atol=1e-9)
+
+
+def test_ellipse_points_lie_on_the_gate_boundary() -> None:
+    rng = np.random.default_rng(4)
+    a = rng.normal(size=(20, 2, 2))
+    cov = a @ a.transpose(0, 2, 1) + 0.5 * np.eye(2)
+    center = rng.uniform(0, 100, size=(20, 2))
+    axes, angle = gate_ellipses(cov, 4.0)
+    pts = ellipse_points(center, axes, angle, n_points=24)
+    d = pts - center[:, None, :]
+    r2 = np.einsum("kpi,kij,kpj->kp", d, np.linalg.inv(cov), d)
+    np.testing.assert_allclose(r2, 4.0, rtol=1e-9)
+
+
+def test_circle_gate_is_drawn_at_its_radius() -> None:
+    img = np.zeros((120, 120, 3), np.uint8)
+    draw_gates(img, np.array([[60.0, 60.0]]), np.eye(2)[None], 20.0**2)
+    lit = _lit(img)
+    # the four extreme points of a radius-20 circle are drawn, centre and far pixels are not
+    for x, y in [(80, 60), (40, 60), (60, 80), (60, 40)]:
+        assert lit[y - 1 : y + 2, x - 1 : x + 2].any(), (x, y)
+    assert not lit[55:66, 55:66].any()
+    assert not lit[60, 90] and not lit[60, 30]
+    ys, xs = np.nonzero(lit)
+    radius = np.hypot(xs - 60, ys - 60)
+    assert 18.3 < radius.min() and radius.max() < 21.8
+    assert tuple(img[ys[0], xs[0]]) != (0, 0, 0)
+    assert np.all(img[lit][:, 2] > 0)  # yellow: red channel on (BGR)
+    assert GATE_COLOR[2] > 0
+
+
+def test_rotated_gate_ellipse_is_drawn_along_its_major_axis() -> None:
+    # major axis at 45° (image coordinates), semi-axes 30 and 8
+    th = np.radians(45.0)
+    rot = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    cov = rot @ np.diag([30.0**2, 8.0**2]) @ rot.T
+    img = np.zeros((160, 160, 3), np.uint8)
+    draw_gates(img, np.array([[80.0, 80.0]]), cov[None], 1.0)
+    lit = _lit(img)
+    tip = np.rint(80 + 30 * np.array([np.cos(th), np.sin(th)])).astype(int)
+    assert lit[tip[1] - 1 : tip[1] + 2, tip[0] - 1 : tip[0] + 2].any()
+    side = np.rint(80 + 8 * np.array([-np.sin(th), np.cos(th)])).astype(int)
+    assert lit[side[1] - 1 : side[1] + 2, side[0] - 1 : side[0] + 2].any()
+    # along the image x axis the boundary is much closer than 30 px
+    assert not lit[80, 108:112].any()
+    ys, xs = np.nonzero(lit)
+    d = np.stack([xs - 80.0, ys - 80.0], axis=1)
+    r2 = np.einsum("pi,ij,pj->p", d, np.linalg.inv(cov), d)
+    assert np.all(np.abs(np.sqrt(r2) - 1.0) < 0.2)
+
+
+def test_coupled_gate_shape_agrees_with_the_coupled_distance() -> None:
+    distances = pytest.importorskip("mvtrack.association.distances")
+    rng = np.random.default_rng(7)
+    k = 12
+    xy = rng.uniform(50, 200, size=(k, 2))
+    p = rng.uniform(2, 9, size=k)
+    cov = p[:, None, None] * np.eye(2)
+    S = cov + 4.0 * np.eye(2)
+    vel = rng.normal(scale=2.0, size=(k, 2))
+    vel[0] = [0.1, 0.0]  # slow: eq. (9) fallback
+    for name in ("euclidean", "uncoupled", "coupled", "mahalanobis"):
+        gate = distances.default_gate(name)
+        center, shape, r2 = gate_shapes(name, xy, cov, S, vel, gate)
+        axes, angle = gate_ellipses(shape, r2)
+        pts = ellipse_points(center, axes, angle, n_points=16)
+        view = distances.TrackView(xy, cov, S, vel, np.zeros((k, 2)))
+        det = pts.reshape(-1, 2)
+        ti = np.repeat(np.arange(k), 16)
+        dj = np.arange(k * 16)
+        value = distances.pair_distance(name, view, det, ti, dj)
+        np.testing.assert_allclose(value, gate, rtol=1e-8, err_msg=name)
+
+
+def test_boxes_carry_the_colour_of_their_state() -> None:
+    img = np.zeros((100, 200, 3), np.uint8)
+    tf = _frame(
+        0, [1, 2, 3], [TrackState.CONFIRMED, TrackState.COASTING, TrackState.STOPPED],
+        [[30, 50], [100, 50], [170, 50]], wh=(20, 20),
+    )
+    draw_boxes(img, tf, thickness=1, labels=False)
+    for (x, _), state in zip(tf.filtered_xy, tf.state, strict=True):
+        # left edge of the box at x - 10, y = 50
+        px = img[50, int(x) - 10]
+        assert tuple(int(c) for c in px) == STATE_COLORS[int(state)]
+    assert not img[50, 30].any()  # box interior untouched
+
+
+def test_trails_follow_each_id_in_time_order() -> None:
+    trails = TrailBuffer(length=3)
+    for k in range(5):
+        trails.push(_frame(k, [7, 2], [1, 1], [[10 + k, 5], [50, 5 + 2 * k]]))
+    ids, lines = trails.polylines()
+    assert list(ids) == [2, 7]
+    np.testing.assert_array_equal(lines[0], [[50, 9], [50, 11], [50, 13]])
+    np.testing.assert_array_equal(lines[1], [[12, 5], [13, 5], [14, 5]])
+    with pytest.raises(ValueError, match="trail length"):
+        TrailBuffer(length=1)
+
+
+def test_annotate_frame_leaves_input_untouched_and_draws() -> None:
+    frame = np.full((60, 80, 3), 40, np.uint8)
+    tf = _frame(0, [1], [TrackState.CONFIRMED], [[40, 30]])
+    out = annotate_frame(frame, tf, gate_center=tf.predicted_xy, gate_cov=np.eye(2)[None],
+                         gate_r2=100.0, text=["frame 0"])
+    assert (frame == 40).all()
+    assert (out != 40).any(axis=2).sum() > 50
+    grey = annotate_frame(frame[..., 0], tf)
+    assert grey.shape == (60, 80, 3)
+
+
+def test_trajectory_figure_and_rows(tmp_path) -> None:
+    frames = [_frame(k, [1, 2], [1, 2], [[10 + k, 20], [60, 20 + k]]) for k in range(10)]
+    rows = TrackRows.from_frames(frames)
+    assert len(rows) == 20
+    ids, paths, frames_of = rows.split()
+    assert list(ids) == [1, 2] and paths[0].shape == (10, 2)
+    np.testing.assert_array_equal(frames_of[1], np.arange(10))
+    assert rows.state_histogram()["coasting"] == 10
+    fig = trajectory_figure(rows, (100, 80), background=np.zeros((80, 100, 3), np.uint8))
+    save_figure(fig, tmp_path / "traj.png")
+    assert (tmp_path / "traj.png").stat().st_size > 1000
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["traj.png"]
