@@ -1,1 +1,37 @@
-"""Data association: distances and gates (papers 1 and 2), and assignment rules."""
+"""Data association: distances and gates (papers 1 and 2), and assignment rules.
+
+- :mod:`~mvtrack.association.distances` — :class:`TrackView` and the distances by name
+  (:data:`DISTANCES`: ``euclidean``, ``uncoupled``, ``coupled``, ``coupled-literal``,
+  ``mahalanobis``, ``iou``) with their default gates.
+- :mod:`~mvtrack.association.gating` — :func:`candidate_pairs`: spatially pre-gated pairs.
+- :mod:`~mvtrack.association.assign` — :func:`assign` with rules ``nearest``, ``greedy``,
+  ``optimal``.
+"""
+
+from mvtrack.association.assign import ASSIGN_RULES, Assignment, assign
+from mvtrack.association.distances import (
+    DISTANCES,
+    Distance,
+    TrackView,
+    default_gate,
+    distance_matrix,
+    gate_radius,
+    get_distance,
+    pair_distance,
+)
+from mvtrack.association.gating import candidate_pairs
+
+__all__ = [
+    "ASSIGN_RULES",
+    "DISTANCES",
+    "Assignment",
+    "Distance",
+    "TrackView",
+    "assign",
+    "candidate_pairs",
+    "default_gate",
+    "distance_matrix",
+    "gate_radius",
+    "get_distance",
+    "pair_distance",
+]

@@ -1,0 +1,181 @@
+"""Assignment rules: hand cases, brute force and dense references, permutation invariance."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import linear_sum_assignment
+
+from mvtrack.association.assign import assign
+
+
+def _pairs(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gated pairs of a dense cost matrix with ``inf`` for forbidden entries."""
+    ti, dj = np.nonzero(np.isfinite(c))
+    return ti, dj, c[ti, dj]
+
+
+# t0-d0 1, t0-d1 2, t1-d0 2, t1-d1 10: greedy takes 1 then 10 (= 11), optimal 2 + 2 (= 4)
+HAND = np.array([[1.0, 2.0], [2.0, 10.0]])
+
+
+def test_nearest_is_non_exclusive() -> None:
+    c = np.array([[1.0, 5.0, np.inf], [2.0, np.inf, np.inf], [np.inf, np.inf, np.inf]])
+    a = assign(*_pairs(c), 3, 3, "nearest")
+    assert a.track.tolist() == [0, 1] and a.det.tolist() == [0, 0]
+    assert a.unmatched_tracks.tolist() == [2]
+    assert a.unmatched_dets.tolist() == [1, 2]
+
+
+def test_nearest_ties_go_to_the_lower_detection_row() -> None:
+    c = np.array([[3.0, 3.0, 3.0]])
+    ti, dj, cost = _pairs(c)
+    order = np.array([2, 0, 1])
+    a = assign(ti[order], dj[order], cost[order], 1, 3, "nearest")
+    assert a.det.tolist() == [0]
+
+
+def test_greedy_and_optimal_hand_case() -> None:
+    g = assign(*_pairs(HAND), 2, 2, "greedy")
+    assert list(zip(g.track, g.det, strict=True)) == [(0, 0), (1, 1)]
+    assert g.cost.sum() == 11.0
+    o = assign(*_pairs(HAND), 2, 2, "optimal")
+    assert list(zip(o.track, o.det, strict=True)) == [(0, 1), (1, 0)]
+    assert o.cost.sum() == 4.0
+    n = assign(*_pairs(HAND), 2, 2, "nearest")
+    assert n.det.tolist() == [0, 0]
+
+
+def test_optimal_maximises_matches_before_cost_unless_unmatched_cost_given() -> None:
+    # t0-d0 0; t0-d1 9; t1-d0 9; t1-d1 forbidden
+    c = np.array([[0.0, 9.0], [9.0, np.inf]])
+    a = assign(*_pairs(c), 2, 2, "optimal")
+    assert len(a) == 2  # both matched, total 18
+    b = assign(*_pairs(c), 2, 2, "optimal", unmatched_cost=10.0)
+    assert len(b) == 1 and b.track.tolist() == [0] and b.det.tolist() == [0]  # 0 + 2·10 < 18 + 0
+    # a pair is worth matching only when its cost is below u
+    b = assign(*_pairs(np.array([[5.0]])), 1, 1, "optimal", unmatched_cost=4.0)
+    assert len(b) == 0 and b.unmatched_tracks.tolist() == [0]
+
+
+def _greedy_reference(c: np.ndarray) -> set[tuple[int, int]]:
+    ti, dj, cost = _pairs(c)
+    used_t, used_d, out = set(), set(), set()
+    for p in np.lexsort((dj, ti, cost)):
+        if ti[p] not in used_t and dj[p] not in used_d:
+            used_t.add(ti[p])
+            used_d.add(dj[p])
+            out.add((int(ti[p]), int(dj[p])))
+    return out
+
+
+def _brute_force(c: np.ndarray, u: float | None) -> float:
+    """Best objective over all exclusive matchings: (−#matches, cost) or cost + u·unmatched/2."""
+    n, m = c.shape
+    best: tuple[float, float] | float | None = None
+    for k in range(min(n, m) + 1):
+        for rows in itertools.combinations(range(n), k):
+            for cols in itertools.permutations(range(m), k):
+                s = sum(c[r, q] for r, q in zip(rows, cols, strict=True))
+                if not np.isfinite(s):
+                    continue
+                val = (-k, s) if u is None else s + u * (n + m - 2 * k) / 2
+                if best is None or val < best:
+                    best = val
+    return best  # type: ignore[return-value]
+
+
+def _random_gated(rng: np.random.Generator, n: int, m: int, density: float) -> np.ndarray:
+    c = rng.uniform(0, 10, (n, m))
+    c[rng.random((n, m)) > density] = np.inf
+    return c
+
+
+@pytest.mark.parametrize("solver", ["dense", "sparse"])
+def test_optimal_equals_brute_force(solver: str) -> None:
+    rng = np.random.default_rng(11)
+    for _ in range(60):
+        n, m = rng.integers(1, 5, 2)
+        c = _random_gated(rng, n, m, rng.uniform(0.3, 1.0))
+        for u in (None, 7.0):
+            a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u, solver=solver)
+            got = (
+                (-len(a), a.cost.sum())
+                if u is None
+                else a.cost.sum() + u * (n + m - 2 * len(a)) / 2
+            )
+            ref = _brute_force(c, u)
+            np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("solver", ["dense", "sparse", "auto"])
+def test_optimal_equals_dense_lsa_on_many_clusters(solver: str) -> None:
+    """Block-sparse problem with many clusters: same total cost as one dense LSA."""
+    rng = np.random.default_rng(12)
+    n = m = 200
+    pos_t = rng.uniform(0, 400, (n, 2))
+    pos_d = pos_t + rng.normal(0, 3, (m, 2))
+    d2 = ((pos_t[:, None] - pos_d[None]) ** 2).sum(-1)
+    c = np.where(d2 <= 100.0, d2, np.inf)
+    a = assign(*_pairs(c), n, m, "optimal", solver=solver)
+    big = 1e6
+    r, k = linear_sum_assignment(np.where(np.isfinite(c), c, big))
+    real = np.isfinite(c[r, k])
+    assert len(a) == real.sum()
+    assert a.cost.sum() == pytest.approx(c[r, k][real].sum(), rel=1e-12)
+    assert len(set(a.det.tolist())) == len(a)  # exclusive
+
+
+def test_greedy_equals_sequential_reference() -> None:
+    rng = np.random.default_rng(13)
+    for _ in range(50):
+        n, m = rng.integers(1, 12, 2)
+        c = _random_gated(rng, n, m, 0.5)
+        c[rng.random((n, m)) < 0.2] = 1.0  # ties
+        a = assign(*_pairs(c), n, m, "greedy")
+        assert set(zip(a.track.tolist(), a.det.tolist(), strict=True)) == _greedy_reference(c)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.integers(1, 8),
+    st.integers(1, 8),
+    st.integers(0, 2**32 - 1),
+    st.sampled_from(["nearest", "greedy", "optimal"]),
+)
+def test_assignment_invariant_under_detection_permutation(
+    n: int, m: int, seed: int, rule: str
+) -> None:
+    rng = np.random.default_rng(seed)
+    c = _random_gated(rng, n, m, 0.6)
+    perm = rng.permutation(m)  # new column q holds old detection perm[q]
+    a = assign(*_pairs(c), n, m, rule)  # type: ignore[arg-type]
+    b = assign(*_pairs(c[:, perm]), n, m, rule)  # type: ignore[arg-type]
+    assert a.track.tolist() == b.track.tolist()
+    assert a.det.tolist() == perm[b.det].tolist()
+    assert sorted(a.unmatched_dets.tolist()) == sorted(perm[b.unmatched_dets].tolist())
+
+
+def test_empty_and_all_unmatched() -> None:
+    e = np.zeros(0, dtype=int)
+    for rule in ("nearest", "greedy", "optimal"):
+        a = assign(e, e, np.zeros(0), 3, 2, rule)  # type: ignore[arg-type]
+        assert len(a) == 0
+        assert a.unmatched_tracks.tolist() == [0, 1, 2]
+        assert a.unmatched_dets.tolist() == [0, 1]
+        assert a.det_of_track(3).tolist() == [-1, -1, -1]
+
+
+def test_bad_input_raises() -> None:
+    with pytest.raises(ValueError, match="unknown rule"):
+        assign([0], [0], [1.0], 1, 1, "hungarian")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="out of range"):
+        assign([1], [0], [1.0], 1, 1)
+    with pytest.raises(ValueError, match="NaN"):
+        assign([0], [0], [np.nan], 1, 1)
+    with pytest.raises(ValueError, match="equal length"):
+        assign([0, 0], [0], [1.0], 1, 1)
