@@ -1,1 +1,17 @@
 """Detection front ends: disturbance map, frame differencing, MOG2, template matching, parts."""
+
+from mvtrack.detection.background import MOG2, DisturbanceMap, FrameDifference
+from mvtrack.detection.base import FrontEnd
+from mvtrack.detection.blobs import BlobExtractor, blobs_from_mask
+from mvtrack.detection.frontends import DETECTORS, make_detector
+
+__all__ = [
+    "DETECTORS",
+    "MOG2",
+    "BlobExtractor",
+    "DisturbanceMap",
+    "FrameDifference",
+    "FrontEnd",
+    "blobs_from_mask",
+    "make_detector",
+]

@@ -1,0 +1,45 @@
+"""Detection front ends by name: ``make_detector("disturbance-map", threshold=30)``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from mvtrack.detection.background import MOG2, DisturbanceMap, FrameDifference
+from mvtrack.detection.base import FrontEnd
+
+#: Front-end names accepted by :func:`make_detector`, and their classes.
+DETECTORS: dict[str, type[FrontEnd]] = {
+    "disturbance-map": DisturbanceMap,
+    "frame-diff": FrameDifference,
+    "mog2": MOG2,
+}
+
+
+def make_detector(name: str, **params: Any) -> FrontEnd:
+    """A detection front end by name, with its parameters as keywords.
+
+    Parameters
+    ----------
+    name : str
+        ``"disturbance-map"`` (paper 1, the default of the pipeline), ``"frame-diff"`` (the
+        baseline paper 1 rejects) or ``"mog2"`` (OpenCV's mixture model).
+    **params
+        Constructor parameters of the class (see :class:`DisturbanceMap`,
+        :class:`FrameDifference`, :class:`MOG2`); names use underscores (``min_area``).
+
+    Raises
+    ------
+    ValueError
+        Unknown name (the message lists the known ones), or a parameter the front end does not
+        have.
+    """
+    try:
+        cls = DETECTORS[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown detector {name!r}; choose one of: {', '.join(DETECTORS)}"
+        ) from None
+    try:
+        return cls(**params)
+    except TypeError as exc:
+        raise ValueError(f"detector {name!r}: {exc}") from None
