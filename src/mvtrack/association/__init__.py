@@ -6,6 +6,7 @@
 - :mod:`~mvtrack.association.gating` — :func:`candidate_pairs`: spatially pre-gated pairs.
 - :mod:`~mvtrack.association.assign` — :func:`assign` with rules ``nearest``, ``greedy``,
   ``optimal``.
+- :mod:`~mvtrack.association.explain` — :func:`explain`: why a detection was not associated.
 """
 
 from mvtrack.association.assign import ASSIGN_RULES, Assignment, assign
@@ -19,6 +20,7 @@ from mvtrack.association.distances import (
     get_distance,
     pair_distance,
 )
+from mvtrack.association.explain import Explanation, explain
 from mvtrack.association.gating import candidate_pairs
 
 __all__ = [
@@ -26,11 +28,13 @@ __all__ = [
     "DISTANCES",
     "Assignment",
     "Distance",
+    "Explanation",
     "TrackView",
     "assign",
     "candidate_pairs",
     "default_gate",
     "distance_matrix",
+    "explain",
     "gate_radius",
     "get_distance",
     "pair_distance",
