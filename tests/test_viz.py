@@ -147,6 +147,10 @@ def test_trails_follow_each_id_in_time_order() -> None:
     assert list(ids) == [2, 7]
     np.testing.assert_array_equal(lines[0], [[50, 9], [50, 11], [50, 13]])
     np.testing.assert_array_equal(lines[1], [[12, 5], [13, 5], [14, 5]])
+    empty = TrailBuffer(length=4)
+    empty.push(_frame(0, [], [], np.zeros((0, 2))))
+    empty.push(_frame(1, [3], [1], [[np.nan, np.nan]]))
+    assert empty.polylines()[1] == []
     with pytest.raises(ValueError, match="trail length"):
         TrailBuffer(length=1)
 
@@ -158,6 +162,9 @@ def test_annotate_frame_leaves_input_untouched_and_draws() -> None:
                          gate_r2=100.0, text=["frame 0"])
     assert (frame == 40).all()
     assert (out != 40).any(axis=2).sum() > 50
+    none = annotate_frame(frame, _frame(1, [], [], np.zeros((0, 2))), gate_center=np.zeros((0, 2)),
+                          gate_cov=np.zeros((0, 2, 2)), gate_r2=np.zeros(0))
+    assert (none == 40).all()
     grey = annotate_frame(frame[..., 0], tf)
     assert grey.shape == (60, 80, 3)
 

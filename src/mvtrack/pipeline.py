@@ -21,12 +21,14 @@ and :func:`build_rescuer` make the real parts from :class:`~mvtrack.config.RunSe
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
-import inspect
+import os
 import sys
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
@@ -38,6 +40,7 @@ from mvtrack.types import Detections, TrackFrame
 
 Image = NDArray[np.uint8]
 RescueFn = Callable[..., Any]
+FloatArray = NDArray[np.float64]
 
 
 class Detector(Protocol):
@@ -202,28 +205,315 @@ def run_frames(
 # --------------------------------------------------------------------------- building parts
 
 
-def _check_kwargs(target: Callable[..., Any], params: dict[str, Any], what: str) -> None:
-    """Raise InputError for keyword arguments ``target`` does not accept."""
-    try:
-        sig = inspect.signature(target)
-    except (TypeError, ValueError):  # pragma: no cover - builtins without a signature
-        return
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in sig.parameters.values()):
-        return
-    known = {n for n, p in sig.parameters.items()
-             if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and n != "self"}
+def build_detector(settings: RunSettings) -> Callable[[Image], Detections]:
+    """The detection front end named in ``settings`` with its parameters.
+
+    Raises
+    ------
+    ValueError
+        Unknown front end or parameter (one line, from :func:`mvtrack.detection.make_detector`).
+    """
+    from mvtrack.detection import make_detector
+
+    return make_detector(settings.detector, **settings.detector_params)
+
+
+def build_tracker_config(settings: RunSettings, fps: float) -> Any:
+    """The :class:`~mvtrack.tracking.TrackerConfig` of ``settings`` at frame rate ``fps``.
+
+    ``settings.tracker["preset"]`` (default ``"default"``) is built for ``fps`` and its other
+    keys replace fields of the preset.
+
+    Raises
+    ------
+    InputError
+        Unknown preset or field, or a bad value (one line).
+    """
+    from mvtrack.tracking import TrackerConfig, preset
+
+    params = dict(settings.tracker)
+    name = params.pop("preset", "default")
+    known = {f.name for f in dataclasses.fields(TrackerConfig)}
     for key in params:
         if key not in known:
             raise InputError(
-                f"unknown {what} parameter {key!r} (known: {', '.join(sorted(known))})"
+                f"unknown tracker setting {key!r} (known: {', '.join(sorted(known))})"
             )
-
-
-def build_detector(settings: RunSettings) -> Callable[[Image], Detections]:
-    """The detection front end named in ``settings`` with its parameters."""
-    from mvtrack.detection import make_detector
-
     try:
-        return make_detector(settings.detector, **settings.detector_params)
+        return preset(name, fps=fps, **params)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"tracker settings: {exc}") from None
+
+
+def build_tracker(settings: RunSettings, fps: float) -> Any:
+    """A fresh :class:`~mvtrack.tracking.Tracker` for ``settings`` (validates predictor etc.)."""
+    from mvtrack.tracking import Tracker
+
+    config = build_tracker_config(settings, fps)
+    try:
+        return Tracker(config)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"tracker settings: {exc}") from None
+
+
+def build_rescuer(settings: RunSettings) -> Rescuer | None:
+    """Template matching for stopped vehicles (paper 1 §1.1 step 3), or None if unavailable."""
+    try:
+        from mvtrack.detection.template import TemplateBank
+    except ImportError:  # pragma: no cover - the template module is optional
+        return None
+    try:
+        bank = TemplateBank(**settings.template_params)
     except TypeError as exc:
-        raise InputError(f"detector {settings.detector!r}: {exc}") from None
+        raise InputError(f"template settings: {exc}") from None
+    return TemplateRescuer(bank)
+
+
+class TemplateRescuer:
+    """Adapter between a template bank and the tracker's ``rescue`` callback."""
+
+    def __init__(self, bank: Any) -> None:
+        self.bank = bank
+
+    def callback(self, image: Image) -> RescueFn | None:
+        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` searching ``image``."""
+        raise NotImplementedError
+
+    def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
+        """Store the appearance of tracks that were detected this frame."""
+        raise NotImplementedError
+
+
+# --------------------------------------------------------------------------- gate overlay
+
+
+def next_gates(
+    tracker: Any, next_k: int
+) -> tuple[NDArray[np.int64], FloatArray, FloatArray, FloatArray]:
+    """The gates that the next frame's detections must fall in, for the confirmed tracks.
+
+    The tracker's current predictor state is advanced one frame (a pure function of the
+    state; the tracker is not changed) and turned into the region of the configured distance
+    (:func:`mvtrack.viz.annotate.gate_shapes`). Under paper 1's warm-up the gate centre is
+    ``2 y_k − y_{k−1}`` (SPEC §1.1 [R]) as in the tracker.
+
+    Parameters
+    ----------
+    tracker : mvtrack.tracking.Tracker
+        The tracker after its step for frame ``next_k − 1``.
+    next_k : int
+        The tracker's step number of the next frame (frames are counted from 0).
+
+    Returns
+    -------
+    track_id : (K,) int64
+        Public IDs of the tracks (tentative tracks are left out).
+    center : (K, 2)
+        Gate centres.
+    shape : (K, 2, 2)
+        Shape matrices ``C`` of ``(z − c)ᵀ C⁻¹ (z − c) ≤ r²``.
+    r2 : (K,)
+        Gate thresholds.
+    """
+    from mvtrack.association.distances import get_distance
+    from mvtrack.viz.annotate import gate_shapes
+
+    tab = tracker.tracks
+    keep = np.asarray(tab.track_id) > 0
+    if not keep.any():
+        z = np.zeros(0)
+        return z.astype(np.int64), z.reshape(0, 2), z.reshape(0, 2, 2), z
+    from mvtrack import _batch
+
+    pred = tracker.predictor
+    ps = pred.predict(_batch.take(tracker.pstate, keep))
+    xy = pred.position(ps)
+    config = tracker.config
+    fp = config.frames()
+    if fp.warmup_hits:
+        warm = tab.hits[keep] < fp.warmup_hits
+        last, prev = tab.last_xy[keep], tab.prev_xy[keep]
+        span = np.maximum(tab.last_k[keep] - tab.prev_k[keep], 1)[:, None]
+        gap = (next_k - tab.last_k[keep])[:, None]
+        centre = last + (last - prev) * (gap / span)  # 2 y_k − y_{k−1}, SPEC §1.1 [R]
+        xy = np.where(warm[:, None], centre, xy)
+    dist = get_distance(config.distance)
+    gate = dist.gate if config.gate is None else float(config.gate)
+    params = {k: v for k, v in dict(getattr(config, "distance_params", {})).items()
+              if k in ("rho", "min_speed", "use_innovation")}
+    center, shape, r2 = gate_shapes(
+        config.distance, xy, pred.position_cov(ps), pred.innovation_cov(ps), pred.velocity(ps),
+        gate, **params,
+    )
+    return np.asarray(tab.track_id)[keep], center, shape, r2
+
+
+# --------------------------------------------------------------------------- whole runs
+
+
+@dataclass
+class RunOutput:
+    """A finished run: the loop's result, the files written and the summary."""
+
+    result: PipelineResult
+    log: Any  # mvtrack.tracking.TrackLog
+    summary: dict[str, Any]
+    paths: dict[str, Path]
+
+
+def _track_lengths(log: Any) -> NDArray[np.int64]:
+    ids = log.columns()["track_id"]
+    ids = ids[ids > 0]
+    return np.unique(ids, return_counts=True)[1] if ids.size else np.zeros(0, dtype=np.int64)
+
+
+def track_to_folder(
+    frames: Iterable[Image],
+    *,
+    fps: float,
+    size: tuple[int, int],
+    settings: RunSettings,
+    out: str | os.PathLike[str],
+    max_frames: int | None = None,
+    total: int | None = None,
+    source: str = "",
+    progress: bool | None = None,
+    parts: tuple[Any, Any] | None = None,
+    source_error: Callable[[], str | None] | None = None,
+) -> RunOutput:
+    """Track ``frames`` and write everything into the folder ``out``.
+
+    Files (each written atomically; a failure leaves no partial file):
+
+    - ``results.txt`` — MOTChallenge results (frame, id, left, top, w, h, conf, -1, -1, -1);
+    - ``tracks.mp4`` — the annotated video (unless ``settings.video`` is False): boxes in
+      their state colour, IDs, trails and the predicted gates (ellipse or circle);
+    - ``trajectories.png`` — every track's path over the first frame;
+    - ``summary.json`` — frames, tracks, states histogram, speed, settings, ``ended_early``.
+
+    Ctrl-C during the loop ends it early; the files are still written for the frames
+    processed (``summary["interrupted"]``).
+
+    Parameters
+    ----------
+    frames : iterable of (H, W, 3) uint8
+        The video.
+    fps : float
+        Frame rate of the video (converts the tracker's time-based parameters).
+    size : (W, H)
+        Frame size.
+    settings : RunSettings
+        Detector, tracker and output settings.
+    out : path
+        Output folder (created).
+    max_frames : int, optional
+        Stop after this many frames.
+    total : int, optional
+        Expected number of frames, for the progress bar.
+    source : str
+        Name of the video, for the summary.
+    progress : bool, optional
+        Force the progress bar on or off.
+    parts : (detector, tracker), optional
+        Ready-made parts instead of building them from ``settings``.
+    source_error : callable, optional
+        Asked after the loop why the source ended early (e.g. ``lambda: src.error`` of a
+        :class:`~mvtrack.io.video.FrameSource`); its answer goes to ``result.error``.
+    """
+    import cv2
+
+    from mvtrack.io.atomic import atomic_path, write_json
+    from mvtrack.tracking import TrackLog
+    from mvtrack.viz.annotate import TrailBuffer, annotate_frame
+    from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
+
+    if parts is None:
+        detector, tracker = build_detector(settings), build_tracker(settings, fps)
+    else:
+        detector, tracker = parts
+    rescuer = build_rescuer(settings) if settings.templates else None
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths: dict[str, Path] = {}
+    log = TrackLog()
+    background: list[Image] = []
+    config = tracker.config
+    label = f"{config.predictor} | {config.distance} | {config.assign}"
+
+    with contextlib.ExitStack() as stack:
+        writer = None
+        if settings.video:
+            dest = out / "tracks.mp4"
+            tmp = stack.enter_context(atomic_path(dest))
+            writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
+            if not writer.isOpened():
+                raise OSError(f"cannot write video {dest} (OpenCV has no MPEG-4 encoder)")
+            stack.callback(writer.release)  # runs before atomic_path renames the file
+            paths["video"] = dest
+        trails = TrailBuffer(settings.trail)
+
+        def on_frame(k: int, image: Image, dets: Detections, tracks: TrackFrame) -> None:
+            log.append(tracks)
+            if k == 0:
+                background.append(image.copy())
+            if writer is None:
+                return
+            trails.push(tracks)
+            gates: dict[str, Any] = {}
+            if settings.gates:
+                _, center, shape, r2 = next_gates(tracker, k + 1)
+                gates = {"gate_center": center, "gate_cov": shape, "gate_r2": r2}
+            text = [f"frame {k}  tracks {len(tracks)}", label]
+            writer.write(annotate_frame(image, tracks, trails=trails, text=text, **gates))
+
+        result = run_frames(
+            frames, detector, tracker, rescuer=rescuer, max_frames=max_frames,
+            on_frame=on_frame, total=total, progress=progress,
+        )
+        if result.error is None and source_error is not None and not result.interrupted:
+            result.error = source_error()
+
+    paths["results"] = out / "results.txt"
+    log.write_mot(paths["results"])
+    rows = TrackRows.from_frames(log)
+    lengths = _track_lengths(log)
+    name = Path(source).name if source else "video"
+    fig = trajectory_figure(
+        rows, size, background[0] if background else None,
+        title=f"{name}: {len(lengths)} tracks ({label})",
+    )
+    paths["trajectories"] = out / "trajectories.png"
+    save_figure(fig, paths["trajectories"])
+    summary = {
+        "source": source,
+        "frames": result.n_frames,
+        "video_fps": fps,
+        "size": list(size),
+        "tracks": len(lengths),
+        "track_length_frames": {
+            "median": float(np.median(lengths)) if lengths.size else 0.0,
+            "max": int(lengths.max()) if lengths.size else 0,
+        },
+        "detections": result.n_detections,
+        "states": rows.state_histogram(),
+        "fps": round(result.fps, 2) if result.n_frames else None,
+        "seconds": round(result.seconds, 3),
+        "ended_early": result.ended_early,
+        "interrupted": result.interrupted,
+        "error": result.error,
+        "settings": settings.as_dict(),
+        "tracker": _config_dict(config),
+        "files": {k: v.name for k, v in paths.items()},
+    }
+    paths["summary"] = out / "summary.json"
+    summary["files"]["summary"] = "summary.json"
+    write_json(paths["summary"], summary)
+    return RunOutput(result, log, summary, paths)
+
+
+def _config_dict(config: Any) -> dict[str, Any]:
+    out = {}
+    for f in dataclasses.fields(config):
+        value = getattr(config, f.name)
+        out[f.name] = dict(value) if isinstance(value, Mapping) else value
+    return out

@@ -190,7 +190,7 @@ def box_polygons(xy: FloatArray, wh: FloatArray) -> NDArray[np.int32]:
 def _finite_rows(*arrays: FloatArray) -> NDArray[np.bool_]:
     ok = np.ones(arrays[0].shape[0], dtype=bool)
     for arr in arrays:
-        ok &= np.isfinite(arr.reshape(arr.shape[0], -1)).all(axis=1)
+        ok &= np.isfinite(arr.reshape(arr.shape[0], int(np.prod(arr.shape[1:])))).all(axis=1)
     return ok
 
 
@@ -273,6 +273,8 @@ class TrailBuffer:
         age = np.concatenate([np.full(len(a), k) for k, a in enumerate(self._ids)])
         ok = np.isfinite(xy).all(axis=1)
         ids, xy, age = ids[ok], xy[ok], age[ok]
+        if ids.size == 0:
+            return ids, []
         order = np.lexsort((age, ids))
         ids, xy = ids[order], xy[order]
         uniq, start, count = np.unique(ids, return_index=True, return_counts=True)
