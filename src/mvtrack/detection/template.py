@@ -1,0 +1,413 @@
+"""Stopped vehicles: template matching of a track's last appearance (paper 1, SPEC §1.1 step 3).
+
+A vehicle that stops fades into the disturbance-map background (about ``1/β_min`` = 50 frames
+of memory) and its blob vanishes. Paper 1 finds such vehicles again by template matching
+("vehicle recognition"); SPEC §1.1 [R] fixes the details: for a confirmed track with no
+detection in its gate, the grey patch of its last detected bounding box is searched by
+normalised cross-correlation (NCC) within the gate radius of the prediction, and a match with
+NCC ≥ 0.8 holds the track (the tracker puts it in state ``STOPPED``, same ID).
+
+:class:`TemplateBank` keeps one template per track, keyed by the tracker's internal ``uid``:
+
+* :meth:`TemplateBank.observe` records the detected boxes of this frame's tracks (arrays, no
+  per-track work); the grey patch is cut *lazily*, only when a track is first missed, from the
+  frame of its last detection (the bank keeps that one frame). A track that is detected again
+  gets its template refreshed the same way at its next miss.
+* :meth:`TemplateBank.rescue` matches the missed tracks (few per frame; the only per-track
+  loop, each on a small search window).
+* :meth:`TemplateBank.retain` / :meth:`TemplateBank.drop` forget deleted tracks.
+
+:class:`TemplateRescuer` is the adapter the video pipeline uses: ``callback(frame)`` gives the
+``rescue(uids, predicted_xy, wh) -> (found, xy)`` argument of ``Tracker.step`` and
+``observe(frame, dets, tracks)`` feeds the bank from the step's output.
+
+Coordinates follow :mod:`mvtrack.detection.blobs`: pixel ``(col, row)`` has centre
+``(x, y) = (col, row)``; a box of centre ``x`` and width ``w`` covers columns
+``x − (w − 1)/2 … x + (w − 1)/2``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from mvtrack.types import Detections, TrackFrame
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+Image = NDArray[np.uint8]
+RescueFn = Callable[[IntArray, FloatArray, FloatArray], tuple[BoolArray, FloatArray]]
+
+
+def _grey(img: Image) -> Image:
+    return img if img.ndim == 2 else cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+
+
+class _Template:
+    """One stored appearance: grey patch, the box centre inside it, the observation tick."""
+
+    __slots__ = ("offset", "patch", "tick")
+
+    def __init__(self, patch: Image, offset: tuple[float, float], tick: int) -> None:
+        self.patch = patch
+        self.offset = offset
+        self.tick = tick
+
+
+class TemplateBank:
+    """Last appearances of tracks and their normalised cross-correlation search.
+
+    Parameters
+    ----------
+    min_score : float, default 0.8
+        Accept a match when its NCC (``cv2.TM_CCOEFF_NORMED``) is at least this
+        (SPEC §1.1 [R]).
+    gate_radius : float, default 20
+        Search radius in pixels around the prediction, used when :meth:`rescue` is not given
+        one (paper 1's 20 px system gate, SPEC §1.1).
+    min_size : int, default 4
+        Templates narrower or lower than this (pixels, after clipping to the image) are not
+        kept: too small to correlate reliably.
+    min_std : float, default 2.0
+        Templates whose grey-level standard deviation is below this are not kept (a flat
+        patch has no defined NCC).
+
+    Attributes
+    ----------
+    uids : (T,) int64
+        Tracks that have a recorded detection (sorted).
+    """
+
+    def __init__(
+        self,
+        min_score: float = 0.8,
+        gate_radius: float = 20.0,
+        min_size: int = 4,
+        min_std: float = 2.0,
+    ) -> None:
+        if not (-1.0 <= min_score <= 1.0):
+            raise ValueError(f"min_score must be an NCC in [-1, 1], got {min_score}")
+        if not (math.isfinite(gate_radius) and gate_radius >= 0):
+            raise ValueError(f"gate_radius must be a non-negative number of px, got {gate_radius}")
+        if min_size < 1:
+            raise ValueError(f"min_size must be ≥ 1 px, got {min_size}")
+        if not min_std >= 0:
+            raise ValueError(f"min_std must be ≥ 0, got {min_std}")
+        self.min_score = float(min_score)
+        self.gate_radius = float(gate_radius)
+        self.min_size = int(min_size)
+        self.min_std = float(min_std)
+        self.clear()
+
+    # ------------------------------------------------------------------ bookkeeping (arrays)
+    def clear(self) -> None:
+        """Forget everything."""
+        self.uids = np.zeros(0, np.int64)
+        self._box = np.zeros((0, 4))  # x, y, w, h of the last detection
+        self._det_tick = np.zeros(0, np.int64)  # tick of the last detection
+        self._templates: dict[int, _Template] = {}
+        self._tick = -1
+        self._frame: Image | None = None  # the frame of tick ``_tick``
+
+    def __len__(self) -> int:
+        return int(self.uids.size)
+
+    def __contains__(self, uid: object) -> bool:
+        return isinstance(uid, (int, np.integer)) and bool(np.isin(uid, self.uids))
+
+    def observe(self, frame: Image, uids: ArrayLike, xy: ArrayLike, wh: ArrayLike) -> None:
+        """Record this frame's detected boxes of tracks ``uids`` (their new last appearance).
+
+        Call once per frame, after the tracker's step, with the tracks that were associated
+        with a detection (``uids`` may be empty). The patches are cut lazily from this frame
+        when a track is first missed (:meth:`rescue`), so the cost here is a few array
+        operations, independent of the number of tracks.
+
+        Parameters
+        ----------
+        frame : (H, W, 3) or (H, W) uint8
+            The frame the boxes were detected in (kept by reference until the next call).
+        uids : (K,) int
+            Internal track identities.
+        xy, wh : (K, 2)
+            Centres and sizes of the detected boxes.
+        """
+        uids = np.asarray(uids, np.int64).reshape(-1)
+        xy = np.asarray(xy, np.float64).reshape(-1, 2)
+        wh = np.asarray(wh, np.float64).reshape(-1, 2)
+        if not (uids.size == xy.shape[0] == wh.shape[0]):
+            raise ValueError(
+                f"observe: uids, xy and wh need one row per track, got {uids.size}, "
+                f"{xy.shape[0]}, {wh.shape[0]}"
+            )
+        if np.unique(uids).size != uids.size:
+            raise ValueError("observe: uids must be distinct")
+        self._tick += 1
+        self._frame = frame
+        box = np.hstack([xy, wh])
+        pos = np.searchsorted(self.uids, uids)
+        known = pos < self.uids.size
+        known[known] = self.uids[pos[known]] == uids[known]
+        # refresh known tracks in place, insert the new ones (kept sorted)
+        self._box[pos[known]] = box[known]
+        self._det_tick[pos[known]] = self._tick
+        new = ~known
+        if new.any():
+            allu = np.concatenate([self.uids, uids[new]])
+            order = np.argsort(allu, kind="stable")
+            self.uids = allu[order]
+            self._box = np.vstack([self._box, box[new]])[order]
+            tick = np.full(int(new.sum()), self._tick, np.int64)
+            self._det_tick = np.concatenate([self._det_tick, tick])[order]
+
+    def retain(self, uids: ArrayLike) -> None:
+        """Keep only the tracks in ``uids`` (the live ones); forget deleted tracks."""
+        self._keep(np.isin(self.uids, np.asarray(uids, np.int64).reshape(-1)))
+
+    def drop(self, uids: ArrayLike) -> None:
+        """Forget the tracks in ``uids`` (e.g. deleted by the tracker)."""
+        self._keep(~np.isin(self.uids, np.asarray(uids, np.int64).reshape(-1)))
+
+    def _keep(self, keep: BoolArray) -> None:
+        for u in self.uids[~keep].tolist():
+            self._templates.pop(u, None)
+        self.uids, self._box, self._det_tick = (
+            self.uids[keep],
+            self._box[keep],
+            self._det_tick[keep],
+        )
+
+    # ------------------------------------------------------------------------- templates
+    def _cut(self, i: int) -> _Template | None:
+        """Grey patch of track row ``i``'s last detected box, from the kept frame."""
+        if self._frame is None:
+            return None
+        frame = self._frame
+        height, width = frame.shape[:2]
+        x, y, w, h = self._box[i]
+        left = math.floor(x - (w - 1) / 2 + 0.5)
+        top = math.floor(y - (h - 1) / 2 + 0.5)
+        x0, y0 = max(left, 0), max(top, 0)
+        x1 = min(left + max(round(w), 1), width)
+        y1 = min(top + max(round(h), 1), height)
+        if x1 - x0 < self.min_size or y1 - y0 < self.min_size:
+            return None
+        patch = _grey(frame[y0:y1, x0:x1])
+        if float(patch.std()) < self.min_std:
+            return None
+        return _Template(np.ascontiguousarray(patch), (x - x0, y - y0), int(self._det_tick[i]))
+
+    def template(self, uid: int) -> Image | None:
+        """The grey patch held for ``uid`` (cut now if it is due), or ``None``."""
+        i = int(np.searchsorted(self.uids, uid))
+        if i >= self.uids.size or self.uids[i] != uid:
+            return None
+        t = self._current(i)
+        return None if t is None else t.patch
+
+    def _current(self, i: int) -> _Template | None:
+        uid = int(self.uids[i])
+        t = self._templates.get(uid)
+        due = t is None or t.tick < self._det_tick[i]
+        if due and self._det_tick[i] == self._tick:  # last detected in the kept frame
+            t = self._cut(i)
+            if t is None:
+                self._templates.pop(uid, None)
+            else:
+                self._templates[uid] = t
+        return t
+
+    # ---------------------------------------------------------------------------- search
+    def rescue(
+        self,
+        frame: Image,
+        uids: ArrayLike,
+        predicted_xy: ArrayLike,
+        wh: ArrayLike | None = None,
+        gate_radius: float | None = None,
+    ) -> tuple[BoolArray, FloatArray, FloatArray]:
+        r"""Search the missed tracks ``uids`` by NCC around their predictions (SPEC §1.1 [R]).
+
+        For each track with a template :math:`T` (its last detected box, grey) the normalised
+        cross-correlation
+
+        .. math::
+
+            \mathrm{NCC}(u, v) = \frac{\sum (T - \bar T)(I_{u,v} - \bar I_{u,v})}
+                                     {\sqrt{\sum (T - \bar T)^2 \sum (I_{u,v} - \bar I_{u,v})^2}}
+
+        (``cv2.TM_CCOEFF_NORMED``) is evaluated for every placement whose box centre lies within
+        ``gate_radius`` of the prediction (a circle; the search window is clipped to the
+        image), and the best placement is accepted if its NCC ≥ ``min_score``.
+
+        Parameters
+        ----------
+        frame : (H, W, 3) or (H, W) uint8
+            The current frame.
+        uids : (K,) int
+            Internal identities of the confirmed tracks that got no detection.
+        predicted_xy : (K, 2)
+            Their predicted centres (the gate centres).
+        wh : (K, 2), optional
+            Their box sizes; unused (the template keeps the size of the last detected box),
+            accepted for the tracker's callback signature.
+        gate_radius : float, optional
+            Search radius in px (default: the bank's ``gate_radius``).
+
+        Returns
+        -------
+        found : (K,) bool
+            NCC ≥ ``min_score`` inside the gate.
+        xy : (K, 2) float64
+            Centre of the best match (NaN where not found).
+        score : (K,) float64
+            Best NCC inside the gate (NaN where there was no template or no room to search).
+        """
+        uids = np.asarray(uids, np.int64).reshape(-1)
+        pxy = np.asarray(predicted_xy, np.float64).reshape(-1, 2)
+        if pxy.shape[0] != uids.size:
+            raise ValueError(f"rescue: {uids.size} uids but {pxy.shape[0]} predicted positions")
+        r = self.gate_radius if gate_radius is None else float(gate_radius)
+        k = uids.size
+        found = np.zeros(k, bool)
+        out = np.full((k, 2), np.nan)
+        score = np.full(k, np.nan)
+        if k == 0 or self.uids.size == 0:
+            return found, out, score
+        pos = np.searchsorted(self.uids, uids)
+        has = pos < self.uids.size
+        has[has] = self.uids[pos[has]] == uids[has]
+        has &= np.isfinite(pxy).all(axis=1)
+        height, width = frame.shape[:2]
+        ri = math.floor(r)
+        for j in np.flatnonzero(has).tolist():  # the missed tracks only
+            t = self._current(int(pos[j]))
+            if t is None:
+                continue
+            ph, pw = t.patch.shape
+            ox, oy = t.offset
+            px, py = pxy[j]
+            # top-left of the template when its box centre sits on the prediction
+            tx, ty = round(px - ox), round(py - oy)
+            x0, y0 = max(tx - ri, 0), max(ty - ri, 0)
+            x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
+            if x1 - x0 < pw or y1 - y0 < ph:
+                continue  # the window left the image
+            ncc = cv2.matchTemplate(_grey(frame[y0:y1, x0:x1]), t.patch, cv2.TM_CCOEFF_NORMED)
+            # centre of placement (row i, col c) is (x0 + c + ox, y0 + i + oy); circular gate
+            cx = x0 + np.arange(ncc.shape[1]) + ox - px
+            cy = y0 + np.arange(ncc.shape[0]) + oy - py
+            outside = cy[:, None] ** 2 + cx[None, :] ** 2 > r * r
+            ncc[outside | ~np.isfinite(ncc)] = -np.inf
+            i, c = np.unravel_index(int(np.argmax(ncc)), ncc.shape)
+            best = float(ncc[i, c])
+            if not math.isfinite(best):
+                continue
+            score[j] = best
+            out[j] = (x0 + c + ox, y0 + i + oy)
+            found[j] = best >= self.min_score
+        out[~found] = np.nan
+        return found, out, score
+
+    def bind(self, frame: Image, gate_radius: float | None = None) -> RescueFn:
+        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for ``Tracker.step`` on ``frame``."""
+
+        def rescue(
+            uids: IntArray, predicted_xy: FloatArray, wh: FloatArray
+        ) -> tuple[BoolArray, FloatArray]:
+            found, xy, _ = self.rescue(frame, uids, predicted_xy, wh, gate_radius)
+            return found, xy
+
+        return rescue
+
+
+def gate_radius_of(tracker: Any, default: float) -> float:
+    """The tracker's gate as a radius in px when its distance is Euclidean, else ``default``.
+
+    Mahalanobis-type and IoU gates have no single radius in pixels; there the bank's own
+    ``gate_radius`` (paper 1's 20 px) is used.
+    """
+    config = getattr(tracker, "config", None)
+    gate = getattr(tracker, "_gate", None)
+    if config is not None and getattr(config, "distance", None) == "euclidean" and gate:
+        return math.sqrt(float(gate))
+    return default
+
+
+class TemplateRescuer:
+    """Adapter between a :class:`TemplateBank` and ``Tracker.step(dets, rescue=...)``.
+
+    Per frame ``k``::
+
+        dets = detector(frame)
+        out = tracker.step(dets, rescue=rescuer.callback(frame))
+        rescuer.observe(frame, dets, out)
+
+    Parameters
+    ----------
+    bank : TemplateBank
+        The templates and the search parameters.
+    tracker : mvtrack.tracking.Tracker, optional
+        The tracker whose output is observed: needed to map the public IDs of its output rows
+        to the internal ``uid`` the rescue callback receives, and to forget deleted tracks.
+        May be given later with :meth:`attach`.
+    gate_radius : float, optional
+        Search radius in px; default: the tracker's gate radius for the Euclidean distance
+        (``sqrt(gate)``), else the bank's ``gate_radius``.
+    """
+
+    def __init__(
+        self, bank: TemplateBank, tracker: Any = None, gate_radius: float | None = None
+    ) -> None:
+        self.bank = bank
+        self.tracker = tracker
+        self._radius = gate_radius
+
+    def attach(self, tracker: Any) -> None:
+        """Use ``tracker`` (and forget templates of any previous one)."""
+        self.tracker = tracker
+        self.bank.clear()
+
+    @property
+    def gate_radius(self) -> float:
+        """The search radius in px."""
+        if self._radius is not None:
+            return float(self._radius)
+        return gate_radius_of(self.tracker, self.bank.gate_radius)
+
+    def callback(self, frame: Image) -> RescueFn:
+        """The ``rescue`` argument of ``tracker.step`` for ``frame``."""
+        return self.bank.bind(frame, self.gate_radius)
+
+    def observe(self, frame: Image, dets: Detections, tracks: TrackFrame) -> None:
+        """Record the detected boxes of this frame's tracks; forget deleted tracks.
+
+        Rows of ``tracks`` with ``det_index ≥ 0`` and a public ID are mapped to the tracker's
+        internal uids through ``tracker.tracks`` (``uid``, ``track_id``) and stored with the
+        detection's box (the last detected appearance).
+        """
+        if self.tracker is None:
+            raise ValueError("TemplateRescuer: attach a tracker before observing frames")
+        table = self.tracker.tracks
+        t_uid = np.asarray(table.uid, np.int64)
+        t_id = np.asarray(table.track_id, np.int64)
+        det = np.asarray(tracks.det_index, np.int64)
+        rows = (det >= 0) & (np.asarray(tracks.track_id) > 0)
+        ids = np.asarray(tracks.track_id, np.int64)[rows]
+        if t_id.size and ids.size:
+            order = np.argsort(t_id, kind="stable")
+            sorted_ids = t_id[order]
+            pos = np.minimum(np.searchsorted(sorted_ids, ids), t_id.size - 1)
+            ok = sorted_ids[pos] == ids
+            uids = t_uid[order][pos][ok]
+            d = det[rows][ok]
+        else:
+            uids = d = np.zeros(0, np.int64)
+        self.bank.retain(t_uid)
+        self.bank.observe(frame, uids, dets.xy[d], dets.wh[d])

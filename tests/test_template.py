@@ -1,0 +1,224 @@
+"""Template matching for stopped vehicles (SPEC §1.1 step 3, [R]: NCC ≥ 0.8 in the gate)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mvtrack.detection.template import TemplateBank, TemplateRescuer, gate_radius_of
+
+H, W = 120, 160
+VW, VH = 18, 12  # vehicle box
+
+
+def _vehicle(seed: int = 3) -> np.ndarray:
+    """A two-tone textured 'vehicle' (NCC needs texture)."""
+    rng = np.random.default_rng(seed)
+    v = np.full((VH, VW), 60, np.uint8)
+    v[:, VW // 2 :] = 170
+    v[3:9, 4:14] = 230  # windows
+    return np.clip(v + rng.normal(0, 6, v.shape), 0, 255).astype(np.uint8)
+
+
+def _frame(tl: tuple[int, int] | None, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    img = np.clip(rng.normal(110, 4, (H, W)), 0, 255).astype(np.uint8)
+    if tl is not None:
+        x, y = tl
+        img[y : y + VH, x : x + VW] = _vehicle()
+    return np.dstack([img] * 3)
+
+
+def _centre(tl: tuple[int, int]) -> np.ndarray:
+    return np.array([tl[0] + (VW - 1) / 2, tl[1] + (VH - 1) / 2])
+
+
+def _bank_with_vehicle(tl=(50, 40), uid: int = 7) -> TemplateBank:
+    bank = TemplateBank()
+    bank.observe(_frame(tl, seed=1), [uid], [_centre(tl)], [[VW, VH]])
+    return bank
+
+
+def test_rescue_finds_a_stopped_vehicle_at_its_true_centre() -> None:
+    tl = (50, 40)
+    bank = _bank_with_vehicle(tl)
+    # new noise, same place; the prediction is off by (6, −4) px, inside the 20 px gate
+    found, xy, score = bank.rescue(
+        _frame(tl, seed=2), [7], [_centre(tl) + np.array([6, -4])], [[VW, VH]]
+    )
+    assert found.tolist() == [True]
+    assert score[0] >= 0.8
+    np.testing.assert_allclose(xy[0], _centre(tl), atol=0.01)
+
+
+def test_rescue_rejects_a_blank_region() -> None:
+    tl = (50, 40)
+    bank = _bank_with_vehicle(tl)
+    found, xy, score = bank.rescue(_frame(None, seed=2), [7], [_centre(tl)], [[VW, VH]])
+    assert found.tolist() == [False]
+    assert np.isnan(xy).all()
+    assert score[0] < 0.5  # best correlation with road noise is low
+
+
+def test_rescue_searches_only_inside_the_circular_gate() -> None:
+    bank = _bank_with_vehicle((50, 40))
+    moved = (50 + 16, 40 + 16)  # 22.6 px away: outside a 20 px circle, inside its square
+    frame = _frame(moved, seed=2)
+    pred = _centre((50, 40))
+    found, _, _ = bank.rescue(frame, [7], [pred], gate_radius=20)
+    assert not found[0]
+    found, xy, _ = bank.rescue(frame, [7], [pred], gate_radius=23)
+    assert found[0]
+    np.testing.assert_allclose(xy[0], _centre(moved), atol=0.01)
+
+
+def test_only_the_tracks_with_templates_are_searched_and_order_is_kept() -> None:
+    bank = TemplateBank()
+    a, b = (20, 20), (100, 80)
+    img = _frame(a, seed=1)
+    img[b[1] : b[1] + VH, b[0] : b[0] + VW] = 255 - _vehicle()[..., None]
+    bank.observe(img, [5, 2], [_centre(a), _centre(b)], [[VW, VH]] * 2)
+    frame = img.copy()
+    found, xy, _ = bank.rescue(frame, [2, 99, 5], [_centre(b), [60, 60], _centre(a)])
+    assert found.tolist() == [True, False, True]
+    np.testing.assert_allclose(xy[[0, 2]], [_centre(b), _centre(a)], atol=0.01)
+
+
+def test_search_window_clipped_at_the_border_and_skipped_when_no_room() -> None:
+    tl = (0, 0)  # vehicle in the corner; prediction near the corner
+    bank = _bank_with_vehicle(tl)
+    found, xy, _ = bank.rescue(_frame(tl, seed=2), [7], [_centre(tl) - 5])
+    assert found[0]
+    np.testing.assert_allclose(xy[0], _centre(tl), atol=0.01)
+    # prediction far outside the image: no room for the template, not found, no error
+    found, _, score = bank.rescue(_frame(tl, seed=2), [7], [[-200.0, -200.0]])
+    assert not found[0] and np.isnan(score[0])
+
+
+def test_template_is_refreshed_when_the_track_is_detected_again() -> None:
+    bank = _bank_with_vehicle((50, 40))
+    first = bank.template(7)
+    assert first is not None and first.shape == (VH, VW)
+    # detected again elsewhere with a different look: the template follows
+    img = _frame(None, seed=4)
+    img[10 : 10 + VH, 10 : 10 + VW] = 255 - _vehicle()[..., None]
+    bank.observe(img, [7], [_centre((10, 10))], [[VW, VH]])
+    second = bank.template(7)
+    np.testing.assert_array_equal(second, 255 - _vehicle())
+    assert not np.array_equal(first, second)
+
+
+def test_flat_or_tiny_boxes_keep_no_template() -> None:
+    bank = TemplateBank()
+    flat = np.full((H, W, 3), 90, np.uint8)
+    bank.observe(flat, [1, 2], [[50, 50], [80, 80]], [[20, 20], [2, 2]])
+    assert bank.template(1) is None and bank.template(2) is None
+    found, _, _ = bank.rescue(flat, [1, 2], [[50, 50], [80, 80]])
+    assert not found.any()
+
+
+def test_drop_and_retain_forget_deleted_tracks() -> None:
+    bank = TemplateBank()
+    img = _frame((50, 40), seed=1)
+    bank.observe(img, [3, 1, 2], [_centre((50, 40))] * 3, [[VW, VH]] * 3)
+    assert bank.uids.tolist() == [1, 2, 3]
+    bank.drop([2])
+    assert bank.uids.tolist() == [1, 3] and 2 not in bank and 3 in bank
+    bank.retain([3, 42])
+    assert bank.uids.tolist() == [3]
+    assert bank.rescue(img, [1], [_centre((50, 40))])[0].tolist() == [False]
+
+
+def test_bind_gives_the_tracker_callback_signature() -> None:
+    tl = (50, 40)
+    bank = _bank_with_vehicle(tl)
+    rescue = bank.bind(_frame(tl, seed=2), gate_radius=10)
+    found, xy = rescue(np.array([7]), np.array([_centre(tl) + 3]), np.array([[VW, VH]]))
+    assert found.tolist() == [True] and xy.shape == (1, 2)
+
+
+def test_bad_parameters_are_value_errors() -> None:
+    with pytest.raises(ValueError, match="min_score"):
+        TemplateBank(min_score=1.5)
+    with pytest.raises(ValueError, match="gate_radius"):
+        TemplateBank(gate_radius=-1)
+    with pytest.raises(ValueError, match="one row per track"):
+        TemplateBank().observe(_frame(None), [1, 2], [[1, 1]], [[1, 1]])
+
+
+# --- with the real tracker and disturbance map -----------------------------------------------
+
+
+def _stop_and_go(n: int, stop: int, go: int, enter: int = 15):
+    """Empty road until ``enter``; then a vehicle driving right at 2 px/frame, standing still
+    from frame ``stop`` to ``go``."""
+    for k in range(n):
+        kk = min(k, stop) if k < go else stop + (k - go)
+        tl = (10 + 2 * (kk - enter), 50) if k >= enter else None
+        yield k, _frame(tl, seed=100 + k), tl
+
+
+def _run(with_templates: bool, n: int = 200, stop: int = 45, go: int = 185):
+    tracking = pytest.importorskip("mvtrack.tracking")
+    from mvtrack.detection import DisturbanceMap
+
+    tracker = tracking.Tracker(tracking.preset("paper1", fps=30))
+    rescuer = TemplateRescuer(TemplateBank(), tracker) if with_templates else None
+    dm = DisturbanceMap()
+    rows = []
+    for _, frame, _ in _stop_and_go(n, stop, go):
+        dets = dm(frame)
+        rescue = rescuer.callback(frame) if rescuer else None
+        out = tracker.step(dets, rescue=rescue)
+        if rescuer:
+            rescuer.observe(frame, dets, out)
+        rows.append(out)
+    return rows, rescuer
+
+
+def _vehicle_track(rows, k: int, xy: np.ndarray) -> int:
+    """Public ID of the track nearest to ``xy`` in frame ``k``."""
+    r = rows[k]
+    return int(r.track_id[np.argmin(np.hypot(*(r.filtered_xy - xy).T))])
+
+
+STOP_XY = _centre((10 + 2 * (45 - 15), 50))
+
+
+def test_a_vehicle_that_stops_keeps_its_track_in_state_stopped() -> None:
+    from mvtrack.types import TrackState
+
+    rows, rescuer = _run(True)
+    assert rescuer is not None and rescuer.gate_radius == pytest.approx(20.0)
+    tid = _vehicle_track(rows, 45, STOP_XY)
+    states = []
+    for r in rows:
+        sel = r.track_id == tid
+        states.append(int(r.state[sel][0]) if sel.any() else -1)
+    states = np.array(states)
+    # alive from the stop until it drives off again (frame 185) and after
+    assert (states[45:] >= 0).all(), "the track was lost while the vehicle stood still"
+    # after the blob faded (~70 frames after the stop) the track is held by template matching
+    assert (states[130:185] == TrackState.STOPPED).all()
+    # the held position stays put, at the place of the last (fading, partial) blob, which is
+    # on the vehicle
+    held = np.array([r.measured_xy[r.track_id == tid][0] for r in rows[130:185]])
+    assert np.ptp(held, axis=0).max() < 0.5
+    assert np.all(np.abs(held - STOP_XY) <= [VW / 2, VH / 2])
+    # when it moves again it is confirmed by detections again, same ID
+    assert (states[-5:] == TrackState.CONFIRMED).all()
+
+
+def test_without_templates_the_stopped_vehicle_track_ends() -> None:
+    rows, _ = _run(False, n=150)
+    tid = _vehicle_track(rows, 45, STOP_XY)
+    assert not any((r.track_id == tid).any() for r in rows[130:150])
+
+
+def test_gate_radius_follows_a_euclidean_tracker_gate() -> None:
+    tracking = pytest.importorskip("mvtrack.tracking")
+    tracker = tracking.Tracker(tracking.paper1(fps=30, gate_px=10.0))
+    assert gate_radius_of(tracker, 20.0) == pytest.approx(10.0)
+    assert TemplateRescuer(TemplateBank(), tracker).gate_radius == pytest.approx(10.0)
+    assert TemplateRescuer(TemplateBank(), tracker, gate_radius=15).gate_radius == 15
+    assert gate_radius_of(None, 20.0) == 20.0
