@@ -70,19 +70,36 @@ def test_detections(seq: str, num_frames: int) -> list[Detections]:
     return table.to_detections(num_frames)
 
 
-def noisy_detections(gt: MotTable, rng: np.random.Generator) -> list[Detections]:
-    """Ground-truth boxes, ``DROP`` of them removed, noise of ``NOISE`` × box size added."""
+def noisy_table(gt: MotTable, rng: np.random.Generator) -> MotTable:
+    """Ground-truth rows (IDs kept), ``DROP`` of them removed, noise of ``NOISE`` × box size.
+
+    Rows are shuffled within each frame, as a detector would give them.
+    """
     keep = rng.random(len(gt)) >= DROP
     g = gt.take(keep)
     wh = g.tlwh[:, 2:]
     scale = np.hstack([wh, wh])  # σ for (left, top, w, h) = NOISE × (w, h, w, h)
     tlwh = g.tlwh + rng.normal(0.0, 1.0, g.tlwh.shape) * NOISE * scale
     tlwh[:, 2:] = np.maximum(tlwh[:, 2:], 1.0)
-    # Detections in random order within each frame, as a detector would give them.
     order = np.lexsort((rng.random(len(g)), g.frame))
-    noisy = MotTable(g.frame[order], np.full(len(g), -1), tlwh[order], np.ones(len(g)),
-                     g.cls[order], g.visibility[order])
-    return noisy.to_detections(gt.num_frames)
+    return MotTable(g.frame[order], g.id[order], tlwh[order], np.ones(len(g)), g.cls[order],
+                    g.visibility[order])
+
+
+def noisy_detections(gt: MotTable, rng: np.random.Generator) -> list[Detections]:
+    """:func:`noisy_table` as per-frame detections (IDs dropped)."""
+    return noisy_table(gt, rng).to_detections(gt.num_frames)
+
+
+def oracle(seq: str, gt: MotTable, seeds: int) -> dict[str, dict[str, float]]:
+    """The detections scored with their true IDs and no tracking: what a tracker that only
+    outputs detected boxes could reach at best (``test``: test.txt with its own IDs)."""
+    test = evaluate(gt, read_tracks(data_dir() / seq / "test.txt"))
+    noisy = [evaluate(gt, noisy_table(gt, np.random.default_rng(s))) for s in range(seeds)]
+    return {
+        "test": {k: test[k] for k in ("MOTA", "IDF1", "HOTA")},
+        "noisy": {k: float(np.mean([n[k] for n in noisy])) for k in ("MOTA", "IDF1", "HOTA")},
+    }
 
 
 @dataclass(frozen=True)
@@ -157,6 +174,7 @@ def _fmt(x: float | None) -> str:
 def report(
     results: dict[str, dict[str, dict[str, Any]]], combos: list[Combo], default: Combo,
     command: str, seeds: int, elapsed: float, coasting: bool = True,
+    oracles: dict[str, dict[str, dict[str, float]]] | None = None,
 ) -> str:
     """The Markdown fragment docs/bench/tud.md."""
     settings = [f"{s}|{k}" for k in DET_KINDS for s in SEQUENCES]
@@ -196,9 +214,9 @@ def report(
         "",
         "### Best peer, our default and our best combination (MOTA / IDF1)",
         "",
-        "| sequence, detections | best peer | ours, default "
+        "| sequence, detections | detections with true IDs | best peer | ours, default "
         f"({default.name}) | ours, best for this column | best overall ({best_overall.name}) |",
-        "|---|---|---|---|---|",
+        "|---|---|---|---|---|---|",
     ]
     for s in settings:
         seq, kind = s.split("|")
@@ -207,13 +225,18 @@ def report(
         best = max(combos, key=lambda c, s=s: _score(results[c.name][s]))
         b = results[best.name][s]
         o = results[best_overall.name][s]
+        orc = (oracles or {}).get(seq, {}).get(kind)
+        orc_text = "–" if orc is None else f"{_fmt(orc['MOTA'])} / {_fmt(orc['IDF1'])}"
         lines.append(
-            f"| {label[s]} | {peer} {p_mota:.3f} / {p_idf1:.3f} "
+            f"| {label[s]} | {orc_text} | {peer} {p_mota:.3f} / {p_idf1:.3f} "
             f"| {_fmt(d['MOTA'])} / {_fmt(d['IDF1'])} "
             f"| {_fmt(b['MOTA'])} / {_fmt(b['IDF1'])} ({best.name}) "
             f"| {_fmt(o['MOTA'])} / {_fmt(o['IDF1'])} |"
         )
     lines += [
+        "",
+        "*Detections with true IDs*: the input boxes scored with their true identities and no "
+        "tracking (for test.txt, its own IDs) — a reference for what the boxes alone give.",
         "",
         "### Every combination (MOTA / IDF1 / HOTA), sorted by mean MOTA + IDF1",
         "",
@@ -291,7 +314,8 @@ def main(argv: list[str] | None = None) -> int:
     given = argv if argv is not None else sys.argv[1:]
     command = "python benchmarks/bench_tud.py " + " ".join(given)
     write_text(args.out, report(
-        results, combos, default, command.strip(), args.seeds, elapsed, not args.no_coasting
+        results, combos, default, command.strip(), args.seeds, elapsed, not args.no_coasting,
+        {s: oracle(s, gts[s], args.seeds) for s in SEQUENCES},
     ))
     print(f"wrote {args.out}")
     return 0
