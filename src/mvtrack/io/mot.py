@@ -41,7 +41,7 @@ KINDS: tuple[str, ...] = ("det", "gt", "results")
 #: Accepted column counts per kind (the trailing columns are optional).
 _NCOLS: dict[str, tuple[int, int]] = {"det": (7, 10), "gt": (6, 10), "results": (6, 10)}
 
-_SEP = re.compile(r"\s*,\s*|\s+")
+_SEP = re.compile(r"[ \t]*,[ \t]*|[ \t]+")
 
 
 @dataclass(frozen=True)
@@ -197,12 +197,14 @@ def _parse(path: Path, kind: str) -> tuple[FloatArray, IntArray]:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise InputError(f"{path}: not a text file ({exc.reason})") from None
-    raw = text.splitlines()
-    keep = [i for i, s in enumerate(raw) if s.strip() and not s.lstrip().startswith("#")]
+    if " " in text or "\t" in text:  # whitespace-separated (or padded) columns
+        text = _SEP.sub(",", text)
+    raw = [s.strip(",") for s in text.splitlines()]
+    keep = [i for i, s in enumerate(raw) if s and not s.startswith("#")]
     lineno = np.asarray(keep, dtype=np.int64) + 1
     if not keep:
         return np.zeros((0, 10)), lineno
-    body = [_SEP.sub(",", raw[i].strip()).strip(",") for i in keep]
+    body = raw if len(keep) == len(raw) else [raw[i] for i in keep]
     ncols = np.fromiter((s.count(",") + 1 for s in body), dtype=np.int64, count=len(body))
     lo, hi = _NCOLS[kind]
     bad = np.flatnonzero((ncols < lo) | (ncols > hi))
