@@ -198,7 +198,7 @@ def _visibility(
         a = np.maximum(lo, np.maximum(o_lo, 0.0))
         b = np.minimum(hi, np.minimum(o_hi, img))
         hidden += np.clip(b - a, 0.0, None).prod(axis=-1)
-    return inside_frac, np.clip(inside - hidden, 0.0, None) / area
+    return np.minimum(inside_frac, 1.0), np.clip((inside - hidden) / area, 0.0, 1.0)
 
 
 def _assemble(
