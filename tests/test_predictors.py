@@ -90,11 +90,11 @@ def test_per_axis_ca_equals_generic_kalman_on_each_axis() -> None:
         s = p.predict(s)
         x, P = kalman.predict(x, P, model.F, model.Q)
         np.testing.assert_allclose(s.x.reshape(10, 3), x, rtol=1e-10, atol=1e-10)
-        np.testing.assert_allclose(s.P.reshape(10, 3, 3), P, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(p.covariance(s).reshape(10, 3, 3), P, rtol=1e-10, atol=1e-10)
         s = p.update(s, z[t], masks[t])
         x, P = kalman.update(x, P, z[t].reshape(10, 1), model.H, model.R, np.repeat(masks[t], 2))
         np.testing.assert_allclose(s.x.reshape(10, 3), x, rtol=1e-10, atol=1e-10)
-        np.testing.assert_allclose(s.P.reshape(10, 3, 3), P, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(p.covariance(s).reshape(10, 3, 3), P, rtol=1e-10, atol=1e-10)
     np.testing.assert_allclose(p.innovation_cov(s)[:, 0, 0], P[0::2, 0, 0] + 2.0)
 
 
@@ -123,10 +123,10 @@ def test_rls_predictor_equals_rls_module_after_warmup() -> None:
     st, _ = rls.update(st, z[0].reshape(6), 0.95, c=50.0)
     for t in range(1, 40):
         s = p.predict(s)
-        np.testing.assert_allclose(p.position(s).reshape(6), rls.predict(st), rtol=1e-12)
+        np.testing.assert_allclose(p.position(s).reshape(6), rls.predict(st), rtol=1e-9)
         s = p.update(s, z[t], np.ones(3, bool))
         st, _ = rls.update(st, z[t].reshape(6), 0.95, c=50.0)
-    np.testing.assert_allclose(s.w.reshape(6, 3), st.w, rtol=1e-12)
+    np.testing.assert_allclose(s.w.reshape(6, 3), st.w, rtol=1e-8, atol=1e-10)
 
 
 def test_rls_warmup_extrapolates_linearly() -> None:

@@ -27,7 +27,7 @@ deviation), the acceleration to ``acc_var`` (default 1 px²/frame⁴).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -44,6 +44,7 @@ from mvtrack.filters.models import (
 
 __all__ = [
     "PREDICTORS",
+    "AxisKalmanState",
     "CoupledKalmanPredictor",
     "KalmanCAPredictor",
     "KalmanCVPredictor",
@@ -81,17 +82,45 @@ def _diag2(a: FloatArray) -> FloatArray:
     return out
 
 
+def _to_comp(a: FloatArray) -> FloatArray:
+    """Logical (N, 2, K) -> component-first buffer (K, 2N); no copy if already laid out so."""
+    N, _, K = a.shape
+    return np.ascontiguousarray(np.transpose(a, (2, 1, 0))).reshape(K, 2 * N)
+
+
+def _from_comp(buf: FloatArray, N: int) -> FloatArray:
+    """Component-first buffer (K, 2N) -> logical (N, 2, K) view (memory stays component-first)."""
+    return np.transpose(buf.reshape(buf.shape[0], 2, N), (2, 1, 0))
+
+
+def _axes_flat(a: FloatArray) -> FloatArray:
+    """(N, 2) -> (2N,) with all x values first, then all y values (the component order)."""
+    return np.ascontiguousarray(a.T).reshape(-1)
+
+
 @dataclass(frozen=True)
-class KalmanState:
-    """Kalman state of ``N`` tracks.
+class AxisKalmanState:
+    """Per-axis Kalman state of ``N`` tracks (x and y filters of one 1-D model).
 
     Attributes
     ----------
-    x : ndarray
-        (N, 2, n) per-axis states ``[p, v(, a)]`` for x and y, or (N, n) for the coupled model.
-    P : ndarray
-        (N, 2, n, n) per-axis covariances, or (N, n, n) for the coupled model.
+    x : ndarray (N, 2, n)
+        States ``[p, v(, a)]`` of the x and y filters.
+    P : ndarray (N, 2, n(n+1)/2)
+        Covariances, packed upper triangle (``mvtrack.filters.fast.unpack`` gives the full
+        matrices; :meth:`PerAxisKalmanPredictor.covariance` too).
+
+    The arrays are stored component-first in memory (their transposes are C-contiguous) so
+    the per-frame kernels run on contiguous vectors; ``take``/``concat`` work as usual.
     """
+
+    x: FloatArray
+    P: FloatArray
+
+
+@dataclass(frozen=True)
+class KalmanState:
+    """Coupled Kalman state of ``N`` tracks: ``x`` (N, n), ``P`` (N, n, n)."""
 
     x: FloatArray
     P: FloatArray
@@ -99,6 +128,10 @@ class KalmanState:
 
 class PerAxisKalmanPredictor:
     """Per-axis linear KF (x and y as two independent filters of one 1-D model).
+
+    All ``2N`` filters are advanced together by the closed-form kernels of
+    :mod:`mvtrack.filters.fast` (equal to :func:`mvtrack.filters.kalman.predict` /
+    :func:`~mvtrack.filters.kalman.update`, tested).
 
     Parameters
     ----------
@@ -125,48 +158,52 @@ class PerAxisKalmanPredictor:
         p0 = [self.r, self.vel_var, self.acc_var][: model.n] + [self.acc_var] * (model.n - 3)
         self._P0 = np.diag(p0)
 
-    def init(self, xy: FloatArray) -> KalmanState:
+    def init(self, xy: FloatArray) -> AxisKalmanState:
         """State of ``K`` new tracks at ``xy`` (K, 2): zero velocity, ``P₀ = diag(r, vel_var…)``."""
         xy = _check_xy("xy", xy)
         if not np.all(np.isfinite(xy)):
             raise ValueError("xy holds NaN or infinite values")
         K, n = xy.shape[0], self.model.n
-        x = np.zeros((K, 2, n))
-        x[:, :, 0] = xy
-        P = np.broadcast_to(self._P0, (K, 2, n, n)).copy()
-        return KalmanState(x=x, P=P)
+        x = np.zeros((n, 2, K))
+        x[0] = xy.T
+        P = np.empty((n * (n + 1) // 2, 2, K))
+        P[:] = fast.pack(self._P0)[:, None, None]
+        return AxisKalmanState(x=np.transpose(x, (2, 1, 0)), P=np.transpose(P, (2, 1, 0)))
 
-    def predict(self, state: KalmanState) -> KalmanState:
+    def predict(self, state: AxisKalmanState) -> AxisKalmanState:
         """Time update, eqs. (6)–(7) of paper 1, of every track and axis."""
-        N, _, n = state.x.shape
-        x, P = fast.axis_predict(state.x.reshape(2 * N, n), state.P.reshape(2 * N, n, n),
-                                 self.model.F, self.model.Q)
-        return KalmanState(x=x.reshape(N, 2, n), P=P.reshape(N, 2, n, n))
+        N = state.x.shape[0]
+        x, P = fast.kf_axis_predict(_to_comp(state.x), _to_comp(state.P), self.model.F,
+                                    self.model.Q)
+        return AxisKalmanState(x=_from_comp(x, N), P=_from_comp(P, N))
 
-    def update(self, state: KalmanState, z: FloatArray, mask: BoolArray) -> KalmanState:
+    def update(self, state: AxisKalmanState, z: FloatArray, mask: BoolArray) -> AxisKalmanState:
         """Measurement update, eqs. (3)–(5); rows with mask False or NaN keep the prediction."""
-        N, _, n = state.x.shape
+        N = state.x.shape[0]
         z, ok = _check_z_mask(z, mask, N)
-        ok2 = np.repeat(ok, 2)
-        x, P = fast.axis_update(state.x.reshape(2 * N, n), state.P.reshape(2 * N, n, n),
-                                z.reshape(2 * N), self.r, ok2)
-        return KalmanState(x=x.reshape(N, 2, n), P=P.reshape(N, 2, n, n))
+        x, P = fast.kf_axis_update(_to_comp(state.x), _to_comp(state.P), _axes_flat(z), self.r,
+                                   np.concatenate([ok, ok]))
+        return AxisKalmanState(x=_from_comp(x, N), P=_from_comp(P, N))
 
-    def position(self, state: KalmanState) -> FloatArray:
+    def covariance(self, state: AxisKalmanState) -> FloatArray:
+        """Full per-axis covariances (N, 2, n, n)."""
+        return fast.unpack(state.P, self.model.n)
+
+    def position(self, state: AxisKalmanState) -> FloatArray:
         """Position estimate (N, 2): ``H x`` per axis."""
         return state.x[:, :, 0].copy()
 
-    def velocity(self, state: KalmanState) -> FloatArray:
+    def velocity(self, state: AxisKalmanState) -> FloatArray:
         """Velocity estimate (N, 2), px/frame."""
         return state.x[:, :, 1].copy()
 
-    def position_cov(self, state: KalmanState) -> FloatArray:
+    def position_cov(self, state: AxisKalmanState) -> FloatArray:
         """Diagonal position covariance (N, 2, 2): ``P[0, 0]`` of each axis."""
-        return _diag2(state.P[:, :, 0, 0])
+        return _diag2(state.P[:, :, 0])
 
-    def innovation_cov(self, state: KalmanState) -> FloatArray:
+    def innovation_cov(self, state: AxisKalmanState) -> FloatArray:
         """Diagonal innovation covariance (N, 2, 2): ``S = P[0, 0] + r`` per axis."""
-        return _diag2(state.P[:, :, 0, 0] + self.r)
+        return _diag2(state.P[:, :, 0] + self.r)
 
 
 class KalmanCAPredictor(PerAxisKalmanPredictor):
@@ -287,8 +324,9 @@ class RLSPredictorState:
     ----------
     w : ndarray (N, 2, M)
         Weights per axis.
-    P : ndarray (N, 2, M, M)
-        The matrix P of eq. (15) per axis.
+    P : ndarray (N, 2, M(M+1)/2)
+        The matrix P of eq. (15) per axis, packed upper triangle
+        (:func:`mvtrack.filters.fast.unpack`).
     taps : ndarray (N, 2, M)
         Delay line per axis, newest first.
     xy : ndarray (N, 2)
@@ -297,6 +335,9 @@ class RLSPredictorState:
         Running (EWMA) estimate of the a-priori error variance per axis.
     count : ndarray (N,) of int
         Number of observations received (for the warm-up).
+
+    ``w``, ``P`` and ``taps`` are stored component-first in memory (see
+    :class:`AxisKalmanState`).
     """
 
     w: FloatArray
@@ -390,61 +431,78 @@ class RLSPredictor:
         if not np.all(np.isfinite(xy)):
             raise ValueError("xy holds NaN or infinite values")
         K, M = xy.shape[0], self.M
-        flat = xy.reshape(2 * K)
-        hist = None if self.history == "zeros" else np.repeat(flat[:, None], M, axis=1)
-        st = rls.init(2 * K, M, self.c, taps=hist)
-        st, _ = fast.rls_update(st.w, st.P, st.taps, flat, self.lam, np.ones(2 * K, bool),
-                                self.trace_max)
+        flat = _axes_flat(xy)
+        taps = np.zeros((M, 2 * K)) if self.history == "zeros" else np.tile(flat, (M, 1))
+        p0 = np.zeros((M * (M + 1) // 2, 2 * K))
+        p0[np.diagonal(fast.packed_index(M))] = self.c
+        w, p, taps, _ = fast.rls_step(np.zeros((M, 2 * K)), p0, taps, flat, self.lam,
+                                      np.ones(2 * K, bool), self.trace_max, self.c)
         return RLSPredictorState(
-            w=st.w.reshape(K, 2, M),
-            P=st.P.reshape(K, 2, M, M),
-            taps=st.taps.reshape(K, 2, M),
+            w=_from_comp(w, K),
+            P=_from_comp(p, K),
+            taps=_from_comp(taps, K),
             xy=xy.copy(),
             err_var=np.full((K, 2), self.r + self.vel_var),
             count=np.ones(K, dtype=np.int64),
         )
 
+    def _rls_prediction(self, state: RLSPredictorState) -> FloatArray:
+        """``ŵ_nᵀ [y_n … y_{n−M+1}]`` per axis, (N, 2) (E1.5)."""
+        w, t = _to_comp(state.w), _to_comp(state.taps)
+        y = w[0] * t[0]
+        for i in range(1, self.M):
+            y += w[i] * t[i]
+        return y.reshape(2, -1).T
+
+    def _extrapolation(self, state: RLSPredictorState) -> FloatArray:
+        """Warm-up prediction ``2 y_n − y_{n−1}`` (``y_n`` for a one-sample track), (N, 2)."""
+        t = state.taps
+        if self.M < 2:
+            return t[:, :, 0].copy()
+        return np.where((state.count >= 2)[:, None], 2.0 * t[:, :, 0] - t[:, :, 1], t[:, :, 0])
+
     def predict(self, state: RLSPredictorState) -> RLSPredictorState:
         """Next-frame position: ``ŷ_{n+1|n} = ŵ_nᵀ[y_n … y_{n−M+1}]`` (E1.5) per axis, or the
         warm-up extrapolation ``2 y_n − y_{n−1}`` for tracks with fewer than ``warmup``
-        observations."""
-        y_rls = np.einsum("nam,nam->na", state.w, state.taps)
-        t = state.taps
-        if self.M >= 2:
-            extrap = np.where((state.count >= 2)[:, None], 2.0 * t[:, :, 0] - t[:, :, 1],
-                              t[:, :, 0])
-        else:
-            extrap = t[:, :, 0]
-        xy = np.where((state.count < self.warmup)[:, None], extrap, y_rls)
-        return _replace_rls(state, xy=xy)
+        observations (SPEC §1.1 [R])."""
+        y_rls = self._rls_prediction(state)
+        if self.warmup > 0:
+            warm = (state.count < self.warmup)[:, None]
+            y_rls = np.where(warm, self._extrapolation(state), y_rls)
+        return replace(state, xy=y_rls)
 
-    def update(self, state: RLSPredictorState, z: FloatArray, mask: BoolArray
-               ) -> RLSPredictorState:
+    def update(
+        self, state: RLSPredictorState, z: FloatArray, mask: BoolArray
+    ) -> RLSPredictorState:
         """Feed the observations to the RLS filters, eqs. (12)–(15) of paper 1.
 
-        Rows without an observation keep their weights; the reported prediction enters their
-        delay line in place of the missing observation (the track coasts).
+        Rows without an observation keep their weights and ``P``; the position reported by
+        :meth:`predict` enters their delay line in place of the missing observation (the
+        track coasts). The running error variance ``e ← (1 − β) e + β (z − ŷ)²`` uses the
+        error of the reported prediction.
         """
-        N, _, M = state.w.shape
+        N = state.w.shape[0]
         z, ok = _check_z_mask(z, mask, N)
-        ok2 = np.repeat(ok, 2)
-        # coasting tracks feed their reported prediction into the delay line
-        y = np.where(ok[:, None], z, state.xy).reshape(2 * N)
-        st, _ = fast.rls_update(state.w.reshape(2 * N, M), state.P.reshape(2 * N, M, M),
-                                state.taps.reshape(2 * N, M), y, self.lam, ok2, self.trace_max)
+        fill = _axes_flat(state.xy)
+        w, p, taps, _ = fast.rls_step(
+            _to_comp(state.w), _to_comp(state.P), _to_comp(state.taps), _axes_flat(z),
+            self.lam, np.concatenate([ok, ok]), self.trace_max, self.c, fill=fill,
+        )
         err = np.where(ok[:, None], z, state.xy) - state.xy
         err_var = np.where(ok[:, None], (1 - self.beta) * state.err_var + self.beta * err**2,
                            state.err_var)
-        # a missing observation's delay line gets the reported prediction, not RLS's own
-        taps = np.where(ok2[:, None] | (np.arange(M) > 0), st.taps, y[:, None]).reshape(N, 2, M)
         return RLSPredictorState(
-            w=st.w.reshape(N, 2, M),
-            P=st.P.reshape(N, 2, M, M),
-            taps=taps,
-            xy=taps[:, :, 0].copy(),
+            w=_from_comp(w, N),
+            P=_from_comp(p, N),
+            taps=_from_comp(taps, N),
+            xy=taps[0].reshape(2, N).T.copy(),
             err_var=err_var,
             count=state.count + ok,
         )
+
+    def covariance(self, state: RLSPredictorState) -> FloatArray:
+        """Full matrices P of eq. (15), (N, 2, M, M)."""
+        return fast.unpack(state.P, self.M)
 
     def position(self, state: RLSPredictorState) -> FloatArray:
         """Prediction after ``predict``; the newest observation after ``update``."""
@@ -452,11 +510,10 @@ class RLSPredictor:
 
     def velocity(self, state: RLSPredictorState) -> FloatArray:
         """Predicted displacement per frame: ``ŷ_{n+1|n} − y_n`` (0 for a one-sample track)."""
-        y_rls = np.einsum("nam,nam->na", state.w, state.taps)
-        t = state.taps
-        v = 2.0 * t[:, :, 0] - t[:, :, 1] if self.M >= 2 else t[:, :, 0]
-        pred = np.where((state.count < self.warmup)[:, None], v, y_rls)
-        return np.where((state.count >= 2)[:, None], pred - t[:, :, 0], 0.0)
+        pred = self._rls_prediction(state)
+        if self.warmup > 0:
+            pred = np.where((state.count < self.warmup)[:, None], self._extrapolation(state), pred)
+        return np.where((state.count >= 2)[:, None], pred - state.taps[:, :, 0], 0.0)
 
     def position_cov(self, state: RLSPredictorState) -> FloatArray:
         """``P̄ = max(e − r, min_var)`` per axis from the running error variance, (N, 2, 2)."""
@@ -465,12 +522,6 @@ class RLSPredictor:
     def innovation_cov(self, state: RLSPredictorState) -> FloatArray:
         """``S = P̄ + r`` per axis, (N, 2, 2)."""
         return _diag2(np.maximum(state.err_var - self.r, self.min_var) + self.r)
-
-
-def _replace_rls(state: RLSPredictorState, **changes: Any) -> RLSPredictorState:
-    from dataclasses import replace
-
-    return replace(state, **changes)
 
 
 #: predictor name -> class
