@@ -285,3 +285,22 @@ def test_structured_predictor_follows_the_predictor_protocol() -> None:
     np.testing.assert_allclose(
         pred.innovation_cov(s) - cov, np.broadcast_to(4.0 / 3 * np.eye(2), (2, 2, 2))
     )
+
+
+def test_occlusion_scaled_relation_noise_keeps_the_learned_offset() -> None:
+    graph = PartGraph.chain(2)
+    z0 = np.array([[[0.0, 0.0], [0.0, 30.0]]])
+    z = np.array([[[0.0, 0.0], [6.0, 30.0]]])  # part 1 seems to jump (a biased centroid)
+    out = {}
+    for noise in ("constant", "occlusion"):
+        params = SKFParams(relation_noise=noise)
+        s = predict(params, init(params, graph, z0))
+        out[noise, 0.0] = update(params, graph, s, z, np.zeros((1, 2)))[0]
+        out[noise, 0.9] = update(params, graph, s, z, np.array([[0.0, 0.9]]))[0]
+    # with α = 0 both settings are the same standard update
+    np.testing.assert_allclose(out["constant", 0.0].xr, out["occlusion", 0.0].xr)
+    # with α^j = 0.9, the relation measurement (15) is pulled by j's prediction in both,
+    # but the scaled noise (R_r / 0.1) lets the offset move much less
+    move_c = np.abs(out["constant", 0.9].xr[0, 0, 0])
+    move_o = np.abs(out["occlusion", 0.9].xr[0, 0, 0])
+    assert 0 < move_o < 0.3 * move_c

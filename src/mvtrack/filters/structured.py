@@ -168,6 +168,9 @@ class SKFParams:
         Frame interval Δt (frames).
     q : float
         Process noise: Q = q·diag(0, 0, 0, 0, 1, 1) (CA) or q·diag(0, 0, 1, 1) (CV).
+    q_rel : float or None
+        Process noise of the relation filters (same form); ``None`` means ``q`` (SPEC §3.3 uses
+        one Q for both).
     r_cell : float
         Cell measurement variance, R_c = r_cell·I₂ (px²).
     r_rel : float or None
@@ -182,11 +185,16 @@ class SKFParams:
         Factor in [0, 1] applied each frame to the velocity and acceleration of a relation with
         an unmatched end (which coasts, having no measurement). Not in paper 3: with 1.0 a CA
         relation coasting for many frames drifts quadratically; 0.8 bounds the drift.
+    relation_noise : {"constant", "occlusion"}
+        ``"constant"``: R_r for every relation update (SPEC §3.3, E3.9). ``"occlusion"`` (not
+        in paper 3): R_r / ((1 − α^i)(1 − α^j)), so an occluded part's own prediction, which
+        (15) mixes into the relation measurement, cannot drag the learned offset along.
     """
 
     model: Literal["ca", "cv"] = "ca"
     dt: float = 1.0
     q: float = 0.05
+    q_rel: float | None = None
     r_cell: float = 4.0
     r_rel: float | None = None
     p0_vel: float = 25.0
@@ -194,6 +202,7 @@ class SKFParams:
     inferred: Literal["prior", "measurement"] = "prior"
     normalise: Literal["count", "weights"] = "count"
     relation_damping: float = 0.8
+    relation_noise: Literal["constant", "occlusion"] = "constant"
 
     def __post_init__(self) -> None:
         if self.model not in ("ca", "cv"):
@@ -205,8 +214,12 @@ class SKFParams:
         for name in ("dt", "r_cell", "p0_vel"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
-        if self.q < 0 or self.p0_acc < 0:
-            raise ValueError("q and p0_acc must be >= 0")
+        if self.q < 0 or self.p0_acc < 0 or (self.q_rel is not None and self.q_rel < 0):
+            raise ValueError("q, q_rel and p0_acc must be >= 0")
+        if self.relation_noise not in ("constant", "occlusion"):
+            raise ValueError(
+                f"relation_noise must be 'constant' or 'occlusion', got {self.relation_noise!r}"
+            )
         if not 0.0 <= self.relation_damping <= 1.0:
             raise ValueError(f"relation_damping must be in [0, 1], got {self.relation_damping}")
         if self.r_rel is not None and not self.r_rel > 0:
@@ -240,6 +253,14 @@ class SKFParams:
         """Process noise covariance (SPEC §3.3)."""
         d = np.zeros(self.n)
         d[-2:] = self.q
+        return np.diag(d)
+
+    @property
+    def Q_rel(self) -> FloatArray:
+        """Process noise covariance of the relation filters."""
+        q = self.q if self.q_rel is None else self.q_rel
+        d = np.zeros(self.n)
+        d[-2:] = q
         return np.diag(d)
 
     @property
@@ -404,9 +425,9 @@ def init(params: SKFParams, graph: PartGraph, z: FloatArray) -> SKFState:
 
 def predict(params: SKFParams, state: SKFState) -> SKFState:
     """Predict every cell and relation filter one frame, eqs. (9)–(12) of paper 3."""
-    F, Q = params.F, params.Q
-    xc, Pc = kf_predict(state.xc, state.Pc, F, Q)  # eqs. (9), (10)
-    xr, Pr = kf_predict(state.xr, state.Pr, F, Q)  # eqs. (11), (12)
+    F = params.F
+    xc, Pc = kf_predict(state.xc, state.Pc, F, params.Q)  # eqs. (9), (10)
+    xr, Pr = kf_predict(state.xr, state.Pr, F, params.Q_rel)  # eqs. (11), (12)
     return SKFState(xc, Pc, xr, Pr)
 
 
@@ -518,15 +539,22 @@ def update(
 
     # relations: eq. (15) measurement, eq. (14) update
     mr = relation_measurement(graph, z, alpha, pred)
-    Kr = kf_gain(state.Pr, H, params.R_rel)
     # SPEC §3.3 "No match": the terms of an unmatched part are dropped, so a relation with an
     # unmatched end has no measurement and coasts (with α^j = 1, (15) would measure the
     # relation by its own prediction, a loop that lets the offset drift without bound).
     matched = np.all(np.isfinite(z), axis=-1)
     rel_ok = matched[:, graph.edges[:, 0]] & matched[:, graph.edges[:, 1]]
+    R_rel = np.broadcast_to(params.R_rel, (*state.xr.shape[:2], 2, 2))
+    if params.relation_noise == "occlusion":
+        # option (not in paper 3): the blend of (15) carries the information of the measured
+        # fractions only, so R_r is divided by (1 − α^i)(1 − α^j)
+        info = w[:, graph.edges[:, 0]] * w[:, graph.edges[:, 1]]
+        rel_ok &= info > 1e-6
+        R_rel = R_rel / np.maximum(info, 1e-6)[..., None, None]
+    Kr = kf_gain(state.Pr, H, R_rel)
     gain_r = np.where(rel_ok[..., None, None], Kr, 0.0)
     xr = state.xr + (gain_r @ (mr - state.xr[..., :2])[..., None])[..., 0]  # eq. (14) of paper 3
-    Pr = np.where(rel_ok[..., None, None], kf_riccati(state.Pr, Kr, H, params.R_rel), state.Pr)
+    Pr = np.where(rel_ok[..., None, None], kf_riccati(state.Pr, Kr, H, R_rel), state.Pr)
     # our addition (not in paper 3): a coasting relation's derivatives decay geometrically, so
     # a part hidden for many frames keeps a bounded offset from its neighbours.
     xr[..., 2:] *= np.where(rel_ok, 1.0, params.relation_damping)[..., None]
