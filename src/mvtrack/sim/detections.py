@@ -79,8 +79,10 @@ def detections_with_truth(
     xy = np.concatenate([xy_t, xy_c])
     wh = np.maximum(np.concatenate([wh_t, wh_c]), 1.0)
     ids = np.concatenate([scene.id[hit], np.full(c, -1, np.int64)])
-    key = rng.random(frame.shape[0]) if shuffle else np.arange(frame.shape[0], dtype=float)
-    order = np.lexsort((key, frame))
+    # Random order first, then a stable sort by frame: shuffled within each frame.
+    perm = rng.permutation(frame.shape[0]) if shuffle else np.arange(frame.shape[0])
+    small = np.int16 if scene.n_frames < 2**15 else np.int64  # int16: NumPy's radix sort
+    order = perm[np.argsort(frame[perm].astype(small), kind="stable")]
     frame, xy, wh, ids = frame[order], xy[order], wh[order], ids[order]
     bounds = np.searchsorted(frame, np.arange(scene.n_frames + 1))
     dets, truth = [], []

@@ -175,8 +175,10 @@ class Scene:
 # ---------------------------------------------------------------------- assembly helpers
 def _box_wh(body: FloatArray, heading: FloatArray, rotates: NDArray[np.bool_]) -> FloatArray:
     """Axis-aligned box of a body ``(L, W)`` turned to ``heading`` (broadcast over rows)."""
-    c, s = np.abs(np.cos(heading)), np.abs(np.sin(heading))
     length, width = body[..., 0], body[..., 1]
+    if not np.any(rotates):
+        return np.broadcast_to(body, (*np.shape(heading), 2)).copy()
+    c, s = np.abs(np.cos(heading)), np.abs(np.sin(heading))
     w = np.where(rotates, length * c + width * s, length)
     h = np.where(rotates, length * s + width * c, width)
     return np.stack([w, h], axis=-1)
