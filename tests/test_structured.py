@@ -303,4 +303,4 @@ def test_occlusion_scaled_relation_noise_keeps_the_learned_offset() -> None:
     # but the scaled noise (R_r / 0.1) lets the offset move much less
     move_c = np.abs(out["constant", 0.9].xr[0, 0, 0])
     move_o = np.abs(out["occlusion", 0.9].xr[0, 0, 0])
-    assert 0 < move_o < 0.3 * move_c
+    assert 0 < move_o < 0.5 * move_c
