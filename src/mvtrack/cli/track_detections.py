@@ -2,8 +2,104 @@
 
 from __future__ import annotations
 
+import sys
+import time
+from pathlib import Path
+from typing import Annotated
+
 import typer
+
+
+def results_name(detfile: Path) -> str:
+    """Name of the results file for ``detfile``: ``<sequence>.txt``.
+
+    MOTChallenge keeps detections in ``<sequence>/det/det.txt``; there the sequence folder
+    names the results, otherwise the detection file's stem does.
+    """
+    if detfile.name == "det.txt" and detfile.parent.name == "det" and detfile.parent.parent.name:
+        return f"{detfile.parent.parent.name}.txt"
+    return f"{detfile.stem}.txt"
 
 
 def register(app: typer.Typer) -> None:
     """Add this module's commands to ``app``."""
+
+    @app.command("track-detections")
+    def track_detections_cmd(
+        detfile: Annotated[Path, typer.Argument(help="MOTChallenge detection file (det.txt).")],
+        out: Annotated[Path, typer.Option(help="Folder for the results file.")],
+        preset: Annotated[
+            str, typer.Option(help="Starting configuration: default, paper1 or paper2.")
+        ] = "default",
+        predictor: Annotated[
+            str | None,
+            typer.Option(help="kalman-ca, kalman-cv, kalman-coupled or rls (default: preset's)."),
+        ] = None,
+        distance: Annotated[
+            str | None,
+            typer.Option(
+                help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis or iou."
+            ),
+        ] = None,
+        assign: Annotated[
+            str | None, typer.Option(help="nearest, greedy or optimal (default: preset's).")
+        ] = None,
+        gate: Annotated[
+            float | None,
+            typer.Option(
+                help="Gate on the distance value: px² for euclidean (400 = 20 px), χ² for "
+                "mahalanobis/uncoupled/coupled (9.21 = 99 %), 1 − IoU for iou. "
+                "Default: the distance's."
+            ),
+        ] = None,
+        fps: Annotated[
+            float, typer.Option(help="Frame rate of the sequence (time-based settings).")
+        ] = 30.0,
+        coasting: Annotated[
+            bool, typer.Option(help="Also write the rows of coasting (missed) tracks.")
+        ] = True,
+    ) -> None:
+        """Track the detections of DETFILE and write MOTChallenge results into --out."""
+        from tqdm import tqdm
+
+        from mvtrack.association import ASSIGN_RULES, DISTANCES
+        from mvtrack.filters.predictors import PREDICTORS
+        from mvtrack.io.mot import read_detections
+        from mvtrack.tracking import Tracker, TrackLog
+        from mvtrack.tracking import preset as make_preset
+
+        _check_choice("--predictor", predictor, PREDICTORS)
+        _check_choice("--distance", distance, DISTANCES)
+        _check_choice("--assign", assign, ASSIGN_RULES)
+        changes = {
+            k: v
+            for k, v in (("predictor", predictor), ("distance", distance), ("assign", assign))
+            if v is not None
+        }
+        if gate is not None:
+            changes["gate"] = gate
+        elif distance is not None:
+            changes["gate"] = None  # the chosen distance's default, not the preset's
+        config = make_preset(preset, fps=fps, **changes)
+        tracker = Tracker(config)
+        frames = read_detections(detfile)
+        log = TrackLog()
+        t0 = time.perf_counter()
+        bar = tqdm(frames, desc="tracking", unit="frame", disable=not sys.stderr.isatty())
+        for dets in bar:
+            log.append(tracker.step(dets))
+        seconds = time.perf_counter() - t0
+        dest = out / results_name(detfile)
+        log.write_mot(dest, include_coasting=coasting)
+        n_dets = sum(len(d) for d in frames)
+        ms = 1000.0 * seconds / max(len(frames), 1)
+        typer.echo(
+            f"{len(frames)} frames, {n_dets} detections -> {log.track_ids.size} tracks, "
+            f"{len(log.to_mot(coasting))} rows ({config.predictor}, {config.distance}, "
+            f"{config.assign}; {ms:.2f} ms/frame) -> {dest}"
+        )
+
+
+def _check_choice(option: str, value: str | None, known: object) -> None:
+    if value is not None and value not in known:  # type: ignore[operator]
+        raise ValueError(f"{option}: unknown value {value!r}; choose one of: {', '.join(known)}")  # type: ignore[call-overload]

@@ -1,0 +1,241 @@
+"""Tracker configuration in physical units, and the presets of the papers.
+
+Every life-cycle parameter that depends on the frame rate is given in seconds or pixels per
+second, and :meth:`TrackerConfig.frames` converts it with ``fps``; the same configuration
+therefore behaves the same at 10 and at 30 fps (up to rounding to whole frames).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+#: Assignment rules understood by :func:`mvtrack.association.assign`.
+ASSIGN_RULES = ("nearest", "greedy", "optimal")
+
+
+@dataclass(frozen=True)
+class FrameParams:
+    """The life-cycle parameters of a :class:`TrackerConfig` converted to frames."""
+
+    confirm_hits: int  #: associations needed to confirm a track
+    confirm_window: int  #: frames (from birth) within which the hits must come
+    max_misses: int  #: consecutive frames a confirmed track may coast; deleted on the next
+    tentative_max_misses: int  #: consecutive misses a tentative track survives
+    warmup_hits: int  #: associations during which the paper-1 gate centre is used (0 = off)
+    init_velocity_std: float | None  #: prior std of the velocity of a new track, px/frame
+    accel_std: float | None  #: white-acceleration std, px/frame² (None = predictor default)
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    """Everything the :class:`~mvtrack.tracking.Tracker` needs, in physical units.
+
+    Attributes
+    ----------
+    predictor : str
+        Predictor name for :func:`mvtrack.filters.predictors.make_predictor`
+        (``kalman-ca``, ``kalman-cv``, ``kalman-coupled``, ``rls``).
+    predictor_params : mapping
+        Extra keyword arguments of the predictor, in frame units (e.g. ``r`` in px²).
+    distance : str
+        Association distance by name (``euclidean``, ``uncoupled``, ``coupled``,
+        ``coupled-literal``, ``mahalanobis``, ``iou``).
+    distance_params : mapping
+        Extra keyword arguments of the distance (e.g. ``rho`` for ``coupled``).
+    assign : str
+        Assignment rule: ``nearest`` (non-exclusive, the papers), ``greedy`` (exclusive
+        nearest) or ``optimal`` (global, per cluster of the gate graph).
+    assign_params : mapping
+        Extra keyword arguments of :func:`mvtrack.association.assign` (e.g.
+        ``unmatched_cost`` for ``optimal``).
+    gate : float or None
+        Gate on the distance's squared value (px² for ``euclidean``, χ² for Mahalanobis-type
+        distances, 1 − IoU for ``iou``); ``None`` uses the distance's default.
+    fps : float
+        Frame rate of the input, used to convert the time-based parameters below.
+    confirm_hits : int
+        A tentative track is confirmed (and gets a public ID) on its ``confirm_hits``-th
+        association, if that comes within ``confirm_window`` seconds of its birth.
+    confirm_window : float or None
+        Seconds; ``None`` means ``confirm_hits`` frames (consecutive hits required).
+    max_coast : float
+        Seconds a confirmed track may coast (no detection) before it is deleted.
+    tentative_max_coast : float
+        Seconds a tentative track may go without detection before it is deleted (0: the first
+        miss deletes it).
+    init_velocity_std : float or None
+        Prior std of a new track's velocity, px/s (None: the predictor's default).
+    accel_std : float or None
+        White-acceleration std of the motion model, px/s² (None: the predictor's default).
+        Converted to ``q = (accel_std / fps²)²`` in px²/frame⁴ for the Kalman predictors.
+    warmup : bool
+        Paper 1's warm-up (SPEC §1.1 [R]): until a track has ``warmup_hits`` associations its
+        gate centre is ``2 y_k − y_{k−1}`` (``y_k`` after one association), whatever the
+        predictor says.
+    warmup_hits : int
+        ``2M = 6`` in paper 1.
+    output_tentative : bool
+        Also output tentative tracks (with ``track_id == -1``).
+    size_smoothing : float
+        Weight in (0, 1] of a new measured box size in the exponential average of ``wh``
+        (1 = use the last measured size).
+    """
+
+    predictor: str = "kalman-cv"
+    predictor_params: Mapping[str, Any] = field(default_factory=dict)
+    distance: str = "mahalanobis"
+    distance_params: Mapping[str, Any] = field(default_factory=dict)
+    assign: str = "optimal"
+    assign_params: Mapping[str, Any] = field(default_factory=dict)
+    gate: float | None = None
+    fps: float = 30.0
+    confirm_hits: int = 3
+    confirm_window: float | None = None
+    max_coast: float = 1.0
+    tentative_max_coast: float = 0.0
+    init_velocity_std: float | None = None
+    accel_std: float | None = None
+    warmup: bool = False
+    warmup_hits: int = 6
+    output_tentative: bool = False
+    size_smoothing: float = 0.5
+
+    def __post_init__(self) -> None:
+        def bad(name: str, why: str) -> ValueError:
+            return ValueError(f"TrackerConfig.{name} {why} (got {getattr(self, name)!r})")
+
+        for name in ("predictor", "distance", "assign"):
+            if not isinstance(getattr(self, name), str) or not getattr(self, name):
+                raise bad(name, "must be a non-empty name")
+        if self.assign not in ASSIGN_RULES:
+            raise bad("assign", f"must be one of {', '.join(ASSIGN_RULES)}")
+        if not _finite_positive(self.fps):
+            raise bad("fps", "must be a finite number > 0")
+        if self.gate is not None and not _finite_positive(self.gate):
+            raise bad("gate", "must be a finite number > 0 or None")
+        if not isinstance(self.confirm_hits, int) or self.confirm_hits < 1:
+            raise bad("confirm_hits", "must be an integer >= 1")
+        if self.confirm_window is not None and not _finite_positive(self.confirm_window):
+            raise bad("confirm_window", "must be a finite number of seconds > 0 or None")
+        for name in ("max_coast", "tentative_max_coast"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+                raise bad(name, "must be a finite number of seconds >= 0")
+        for name in ("init_velocity_std", "accel_std"):
+            value = getattr(self, name)
+            if value is not None and not _finite_positive(value):
+                raise bad(name, "must be a finite number > 0 or None")
+        if not isinstance(self.warmup_hits, int) or self.warmup_hits < 2:
+            raise bad("warmup_hits", "must be an integer >= 2")
+        s = self.size_smoothing
+        if not isinstance(s, (int, float)) or not (0.0 < s <= 1.0):
+            raise bad("size_smoothing", "must be in (0, 1]")
+        for name in ("predictor_params", "distance_params", "assign_params"):
+            if not isinstance(getattr(self, name), Mapping):
+                raise bad(name, "must be a mapping of keyword arguments")
+
+    def frames(self) -> FrameParams:
+        """The life-cycle parameters converted to frames with ``fps``."""
+        fps = float(self.fps)
+        window = (
+            self.confirm_hits
+            if self.confirm_window is None
+            else max(self.confirm_hits, _round(self.confirm_window * fps))
+        )
+        return FrameParams(
+            confirm_hits=self.confirm_hits,
+            confirm_window=window,
+            max_misses=_round(self.max_coast * fps),
+            tentative_max_misses=_round(self.tentative_max_coast * fps),
+            warmup_hits=self.warmup_hits if self.warmup else 0,
+            init_velocity_std=(
+                None if self.init_velocity_std is None else self.init_velocity_std / fps
+            ),
+            accel_std=None if self.accel_std is None else self.accel_std / fps**2,
+        )
+
+    def replace(self, **changes: Any) -> TrackerConfig:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+
+def _finite_positive(value: Any) -> bool:
+    return isinstance(value, (int, float)) and math.isfinite(value) and value > 0
+
+
+def _round(x: float) -> int:
+    # Round half up, with a small tolerance so that 0.1 s × 30 fps gives 3, not 2.
+    return math.floor(x + 0.5 + 1e-9)
+
+
+def paper1(predictor: str = "kalman-ca", fps: float = 30.0, gate_px: float = 20.0) -> TrackerConfig:
+    """Paper 1's system (SPEC §1.1): per-axis CA Kalman or RLS, 20 px circle, nearest.
+
+    Non-exclusive nearest detection inside a circle of ``gate_px`` (20 px; 10 px in the
+    synthetic experiment), unused detections start tracks at once (every started track is
+    counted, so ``confirm_hits = 1``), a track ends after 3 consecutive frames without a
+    detection (it coasts meanwhile), and the warm-up gate centre ``2 y_k − y_{k−1}`` is used
+    until a track has 2M = 6 associations.
+    """
+    if predictor not in ("kalman-ca", "rls"):
+        raise ValueError(f"paper1: predictor must be 'kalman-ca' or 'rls' (got {predictor!r})")
+    return TrackerConfig(
+        predictor=predictor,
+        distance="euclidean",
+        gate=float(gate_px) ** 2,
+        assign="nearest",
+        fps=fps,
+        confirm_hits=1,
+        max_coast=3 / fps,
+        warmup=True,
+        warmup_hits=6,
+    )
+
+
+def paper2(distance: str = "coupled", fps: float = 15.0) -> TrackerConfig:
+    """Paper 2's system (SPEC §2.1): independent per-axis KFs, coupled region, nearest.
+
+    Per-axis constant-acceleration KF with R = 4 px² and q = 0.05 (SPEC §2.1 [R]), the
+    corrected coupled gate (SPEC §2.3, χ² 9.21 by default), non-exclusive nearest, new targets
+    from unassociated measurements, warm-up as paper 1. The real video of paper 2 is 15 fps.
+    """
+    return TrackerConfig(
+        predictor="kalman-ca",
+        predictor_params={"r": 4.0, "q": 0.05},
+        distance=distance,
+        assign="nearest",
+        fps=fps,
+        confirm_hits=1,
+        max_coast=3 / fps,
+        warmup=True,
+        warmup_hits=6,
+    )
+
+
+def default(fps: float = 30.0) -> TrackerConfig:
+    """The modern default (chosen by the crowd benchmark, docs/bench/tracker.md)."""
+    return TrackerConfig(fps=fps)
+
+
+#: Named presets for the command line and experiments.
+PRESETS = {"paper1": paper1, "paper2": paper2, "default": default}
+
+
+def preset(name: str, **overrides: Any) -> TrackerConfig:
+    """The preset ``name`` (``default``, ``paper1``, ``paper2``) with fields overridden.
+
+    ``fps`` is passed to the preset (its frame-based paper values depend on it); the other
+    overrides replace fields of the result.
+    """
+    try:
+        build = PRESETS[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}"
+        ) from None
+    fps = overrides.pop("fps", None)
+    config = build() if fps is None else build(fps=fps)
+    return config.replace(**overrides) if overrides else config

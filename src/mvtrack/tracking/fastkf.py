@@ -1,0 +1,123 @@
+"""Closed-form per-axis constant-velocity Kalman filter for the tracker's hot path.
+
+The same filter as ``kalman-cv`` of :mod:`mvtrack.filters.predictors` (per-axis model
+:func:`mvtrack.filters.models.constant_velocity`, ``H = [1, 0]``), written out in scalars:
+both image axes use the same model, the same initial covariance and the same update mask, so
+their 2×2 covariances are identical (SPEC E2.3) and one ``(a, b, c)`` triple per track serves
+both. A frame then costs a couple of dozen array operations on ``(N,)`` columns instead of
+batched matrix products, which is what keeps the tracker's small-``N`` cost low. The test
+``tests/test_tracker_fastkf.py`` checks it against the general predictor to 1e-9.
+
+With ``P = [[a, b], [b, c]]`` per axis, Δt = 1 frame, ``G = [1/2, 1]ᵀ`` and ``Q = G q Gᵀ``:
+
+.. math::
+    \\bar p = p + v,\\quad \\bar a = a + 2b + c + q/4,\\quad \\bar b = b + c + q/2,
+    \\quad \\bar c = c + q \\qquad \\text{(eqs. (6)–(7) of paper 1)}
+
+    S = \\bar a + r,\\; K = [\\bar a, \\bar b]^T / S \\;(3),\\quad
+    \\hat x = \\bar x + K (z - \\bar p) \\;(4),\\quad
+    a = \\bar a r / S,\\; b = \\bar b r / S,\\; c = \\bar c - \\bar b^2 / S \\;(5)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mvtrack.filters.base import BoolArray, FloatArray
+from mvtrack.filters.models import check_positive
+
+
+@dataclass(frozen=True)
+class CVState:
+    """State of ``N`` tracks.
+
+    Attributes
+    ----------
+    x : (N, 4) float64
+        ``[px, py, vx, vy]`` in pixels and pixels per frame.
+    P : (N, 3) float64
+        ``[a, b, c]``: the per-axis covariance ``[[a, b], [b, c]]`` shared by x and y.
+    """
+
+    x: FloatArray
+    P: FloatArray
+
+
+class FastCVPredictor:
+    """``kalman-cv`` in closed form (implements :class:`mvtrack.filters.base.Predictor`).
+
+    Parameters
+    ----------
+    q : float
+        White-acceleration variance per frame (px²/frame⁴), ``Q = G q Gᵀ``.
+    r : float
+        Measurement-noise variance (px²).
+    vel_var : float
+        Initial velocity variance (px²/frame²); a new track starts at its first measurement
+        with zero velocity and ``P₀ = diag(r, vel_var)`` per axis.
+    """
+
+    name = "kalman-cv"
+
+    def __init__(self, q: float = 0.1, r: float = 1.0, vel_var: float = 25.0) -> None:
+        self.q = check_positive("q", q)
+        self.r = check_positive("r", r)
+        self.vel_var = check_positive("vel_var", vel_var)
+        self._Ft = np.array(  # x ↦ F x for x = [px, py, vx, vy], as a right multiplication
+            [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 1.0, 0.0],
+             [0.0, 1.0, 0.0, 1.0]]
+        )
+        # (a, b, c) ↦ F P Fᵀ: a + 2b + c, b + c, c (Δt = 1)
+        self._FPF = np.array([[1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [1.0, 1.0, 1.0]])
+        self._qvec = self.q * np.array([0.25, 0.5, 1.0])  # G q Gᵀ, G = [1/2, 1]ᵀ
+
+    def init(self, xy: FloatArray) -> CVState:
+        """``K`` new tracks at ``xy`` (K, 2) with zero velocity."""
+        k = xy.shape[0]
+        x = np.zeros((k, 4))
+        x[:, :2] = xy
+        P = np.empty((k, 3))
+        P[:] = (self.r, 0.0, self.vel_var)
+        return CVState(x, P)
+
+    def predict(self, state: CVState) -> CVState:
+        """Time update of every track, eqs. (6)–(7) of paper 1 in closed form."""
+        x = state.x @ self._Ft  # eq. (6): p + v Δt, v
+        P = state.P @ self._FPF + self._qvec  # eq. (7): F P Fᵀ + G q Gᵀ on (a, b, c)
+        return CVState(x, P)
+
+    def update(self, state: CVState, z: FloatArray, mask: BoolArray) -> CVState:
+        """Measurement update, eqs. (3)–(5); rows with ``mask`` False or NaN keep the prediction."""
+        x, P = state.x, state.P
+        a, b = P[:, 0], P[:, 1]
+        nu = z - x[:, :2]  # innovation per axis (NaN where missing)
+        ok = mask & (nu == nu).all(axis=1)
+        w = ok / (a + self.r)  # 1/S, eq. (3); 0 where there is no measurement
+        nu = np.where(ok[:, None], nu, 0.0)
+        gain = np.stack([a * w, b * w], axis=1)  # K = [a, b]ᵀ / S, eq. (3)
+        xn = (x.reshape(-1, 2, 2) + gain[:, :, None] * nu[:, None, :]).reshape(-1, 4)  # (4)
+        f = 1.0 - a * w  # (1 − K₁), eq. (5): a r/S, b r/S, c − b²/S
+        Pn = np.stack([a * f, b * f, P[:, 2] - b * b * w], axis=1)
+        return CVState(xn, Pn)
+
+    def position(self, state: CVState) -> FloatArray:
+        """Position (N, 2)."""
+        return state.x[:, :2]
+
+    def velocity(self, state: CVState) -> FloatArray:
+        """Velocity (N, 2), px/frame."""
+        return state.x[:, 2:]
+
+    def position_var(self, state: CVState) -> FloatArray:
+        """Position variance per axis (N,) — the same for x and y."""
+        return state.P[:, 0]
+
+    def position_cov(self, state: CVState) -> FloatArray:
+        """Position covariance (N, 2, 2), ``a I``."""
+        return state.P[:, 0, None, None] * np.eye(2)
+
+    def innovation_cov(self, state: CVState) -> FloatArray:
+        """Innovation covariance (N, 2, 2), ``(a + r) I``."""
+        return (state.P[:, 0, None, None] + self.r) * np.eye(2)

@@ -1,0 +1,100 @@
+"""Accumulate the tracker's per-frame output and turn it into MOTChallenge rows."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mvtrack.types import TrackFrame, TrackState
+
+#: MOTChallenge ``conf`` column per state: rows with a measurement 1, coasting rows 0.5.
+_CONF = np.array([1.0, 1.0, 0.5, 1.0, 0.0])
+
+
+class TrackLog:
+    """All :class:`~mvtrack.types.TrackFrame` s of a run, kept as arrays.
+
+    Frames are appended as they come; :meth:`columns` concatenates them once (cached) into
+    one array per field with a leading ``frame`` column, so a log of a million rows costs
+    a handful of arrays, not a million objects.
+    """
+
+    def __init__(self) -> None:
+        self._frames: list[TrackFrame] = []
+        self._cache: dict[str, NDArray] | None = None
+
+    def append(self, tf: TrackFrame) -> None:
+        """Add one frame's rows."""
+        self._frames.append(tf)
+        self._cache = None
+
+    def __len__(self) -> int:
+        """Number of frames appended."""
+        return len(self._frames)
+
+    def __iter__(self) -> Iterator[TrackFrame]:
+        return iter(self._frames)
+
+    def __getitem__(self, i: int) -> TrackFrame:
+        return self._frames[i]
+
+    @property
+    def n_rows(self) -> int:
+        """Total number of output rows over all frames."""
+        return sum(len(f) for f in self._frames)
+
+    def columns(self) -> dict[str, NDArray]:
+        """All rows as arrays: ``frame`` (K,) plus every array field of ``TrackFrame``."""
+        if self._cache is None:
+            frames = self._frames or [TrackFrame.empty(0)]
+            cols: dict[str, NDArray] = {
+                "frame": np.repeat(
+                    np.array([f.frame for f in frames], dtype=np.int64),
+                    [len(f) for f in frames],
+                )
+            }
+            for name in (
+                "track_id", "state", "det_index", "measured_xy", "filtered_xy",
+                "predicted_xy", "wh", "velocity",
+            ):
+                cols[name] = np.concatenate([getattr(f, name) for f in frames])
+            self._cache = cols
+        return self._cache
+
+    @property
+    def track_ids(self) -> NDArray[np.int64]:
+        """Distinct public IDs seen (sorted)."""
+        ids = self.columns()["track_id"]
+        return np.unique(ids[ids > 0])
+
+    def to_mot(self, include_coasting: bool = True) -> NDArray[np.float64]:
+        """MOTChallenge result rows ``(frame, id, left, top, w, h, conf, -1, -1, -1)``.
+
+        ``frame`` is 1-based (our frame index + 1); boxes are centred on the filtered position.
+        Tentative rows (``track_id == -1``) are never written. ``conf`` is 1 for rows with a
+        measurement (detection or template match) and 0.5 for coasting rows; with
+        ``include_coasting=False`` coasting rows are left out. Rows are sorted by frame, then ID.
+        """
+        c = self.columns()
+        keep = c["track_id"] > 0
+        if not include_coasting:
+            keep &= c["state"] != int(TrackState.COASTING)
+        xy, wh = c["filtered_xy"][keep], c["wh"][keep]
+        out = np.empty((int(keep.sum()), 10))
+        out[:, 0] = c["frame"][keep] + 1
+        out[:, 1] = c["track_id"][keep]
+        out[:, 2:4] = xy - wh / 2
+        out[:, 4:6] = wh
+        out[:, 6] = _CONF[c["state"][keep]]
+        out[:, 7:] = -1.0
+        order = np.lexsort((out[:, 1], out[:, 0]))
+        return out[order]
+
+    def write_mot(self, dest: str | os.PathLike[str], include_coasting: bool = True) -> None:
+        """Write :meth:`to_mot` to ``dest`` atomically (:func:`mvtrack.io.mot.write_results`)."""
+        from mvtrack.io.mot import write_results
+
+        write_results(dest, self.to_mot(include_coasting))

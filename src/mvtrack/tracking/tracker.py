@@ -1,0 +1,486 @@
+"""The multi-target tracker: predict → gate → assign → update → life cycle, per frame.
+
+All track state is a struct of arrays (:class:`TrackTable`, one row per live track) plus the
+predictor's batch state; a frame costs a fixed number of array operations whatever the number
+of tracks, and no Python loop runs over tracks. The pipeline is SPEC §1.1 steps 4–5 (paper 1)
+and §2.1 steps 3–5 (paper 2):
+
+1. **predict** every track one frame (:meth:`Predictor.predict`);
+2. **gate** (track, detection) pairs with the configured distance and its gate
+   (:func:`mvtrack.association.gating.candidate_pairs`, spatially pre-gated);
+3. **assign** with the configured rule (:func:`mvtrack.association.assign.assign`);
+4. **rescue** (optional): confirmed tracks that got no detection are offered to the video
+   pipeline's template matching; the ones it finds are held in state ``STOPPED``;
+5. **update** the predictors with the assigned measurements;
+6. **life cycle** (:mod:`mvtrack.tracking.lifecycle`): confirm, coast, delete, and start new
+   tentative tracks from the unassigned detections (new-target recognition, SPEC §2.1 step 4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mvtrack import _batch
+from mvtrack.association.assign import assign as assign_pairs
+from mvtrack.association.distances import TrackView, get_distance
+from mvtrack.association.gating import candidate_pairs
+from mvtrack.filters.predictors import make_predictor
+from mvtrack.tracking import associate as fast_assoc
+from mvtrack.tracking.config import TrackerConfig
+from mvtrack.tracking.fastkf import CVState, FastCVPredictor
+from mvtrack.tracking.lifecycle import (
+    CONFIRMED,
+    TENTATIVE,
+    birth_order,
+    count_hits,
+    hand_out_ids,
+    next_state,
+)
+from mvtrack.tracking.log import TrackLog
+from mvtrack.types import Detections, TrackFrame
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+#: ``rescue(uids (K,), predicted_xy (K, 2), wh (K, 2)) -> (found (K,) bool, xy (K, 2))``
+_EMPTY = np.zeros(0, dtype=np.intp)
+
+RescueFn = Callable[[IntArray, FloatArray, FloatArray], tuple[Any, Any]]
+
+
+#: integer columns of :class:`TrackTable`
+UID, TID, STATE, HITS, MISSES, AGE, LAST_K, PREV_K = range(8)
+N_INT = 8
+#: float columns: last measurement (x, y), the one before (x, y), box (w, h)
+LAST_XY, PREV_XY, WH = slice(0, 2), slice(2, 4), slice(4, 6)
+N_FLOAT = 6
+
+
+@dataclass(frozen=True)
+class TrackTable:
+    """The ``N`` live tracks as a struct of arrays (the predictor state is kept beside it).
+
+    The columns are stored in two blocks, one ``int64`` and one ``float64``, so that growing
+    and shrinking the table costs two array operations (``mvtrack._batch.take`` / ``concat``
+    work on it too); the properties give each column by name.
+
+    Attributes
+    ----------
+    ints : (N, 8) int64
+        ``uid, track_id, state, hits, misses, age, last_k, prev_k``.
+    floats : (N, 6) float64
+        ``last_xy (2), prev_xy (2), wh (2)``.
+    """
+
+    ints: IntArray
+    floats: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.ints.shape[0])
+
+    @classmethod
+    def empty(cls) -> TrackTable:
+        """No tracks."""
+        return cls(np.zeros((0, N_INT), dtype=np.int64), np.zeros((0, N_FLOAT)))
+
+    def take(self, idx: NDArray[np.intp]) -> TrackTable:
+        """Rows ``idx``."""
+        return TrackTable(self.ints[idx], self.floats[idx])
+
+    @property
+    def uid(self) -> IntArray:
+        """(N,) internal identity, unique for the tracker's life, given at birth."""
+        return self.ints[:, UID]
+
+    @property
+    def track_id(self) -> IntArray:
+        """(N,) public ID (consecutive from 1 in order of confirmation), −1 while tentative."""
+        return self.ints[:, TID]
+
+    @property
+    def state(self) -> IntArray:
+        """(N,) :class:`~mvtrack.types.TrackState` after the last frame."""
+        return self.ints[:, STATE]
+
+    @property
+    def hits(self) -> IntArray:
+        """(N,) associations with a detection (the birth detection counts)."""
+        return self.ints[:, HITS]
+
+    @property
+    def misses(self) -> IntArray:
+        """(N,) consecutive frames without a detection or template match."""
+        return self.ints[:, MISSES]
+
+    @property
+    def age(self) -> IntArray:
+        """(N,) frames since birth (1 in the birth frame)."""
+        return self.ints[:, AGE]
+
+    @property
+    def last_k(self) -> IntArray:
+        """(N,) step number of the last measurement."""
+        return self.ints[:, LAST_K]
+
+    @property
+    def prev_k(self) -> IntArray:
+        """(N,) step number of the measurement before it (= last_k after one)."""
+        return self.ints[:, PREV_K]
+
+    @property
+    def last_xy(self) -> FloatArray:
+        """(N, 2) last measurement."""
+        return self.floats[:, LAST_XY]
+
+    @property
+    def prev_xy(self) -> FloatArray:
+        """(N, 2) the measurement before the last (= last after one)."""
+        return self.floats[:, PREV_XY]
+
+    @property
+    def wh(self) -> FloatArray:
+        """(N, 2) box size, exponentially smoothed over the associated detections."""
+        return self.floats[:, WH]
+
+
+def _take_state(state: Any, idx: NDArray[np.intp]) -> Any:
+    if type(state) is CVState:
+        return CVState(state.x[idx], state.P[idx])
+    return _batch.take(state, idx)
+
+
+def _concat_state(a: Any, b: Any) -> Any:
+    if type(a) is CVState:
+        return CVState(np.concatenate([a.x, b.x]), np.concatenate([a.P, b.P]))
+    return _batch.concat(a, b)
+
+
+def _build_predictor(config: TrackerConfig) -> Any:
+    """The configured predictor; ``kalman-cv`` in its closed form when its parameters allow."""
+    params = _predictor_params(config)
+    if config.predictor == "kalman-cv" and set(params) <= {"q", "r", "vel_var"}:
+        make_predictor("kalman-cv", **params)  # same validation and error messages
+        return FastCVPredictor(**params)
+    return make_predictor(config.predictor, **params)
+
+
+def _predictor_params(config: TrackerConfig) -> dict[str, Any]:
+    """Predictor keyword arguments: the user's, plus the physical priors converted to frames."""
+    params = dict(config.predictor_params)
+    fp = config.frames()
+    if fp.accel_std is not None and config.predictor.startswith("kalman"):
+        params.setdefault("q", fp.accel_std**2)  # px²/frame⁴
+    if fp.init_velocity_std is not None:
+        params.setdefault("vel_var", fp.init_velocity_std**2)  # px²/frame²
+    return params
+
+
+class Tracker:
+    """Multi-target tracker over arrays; one :meth:`step` per frame.
+
+    Parameters
+    ----------
+    config : TrackerConfig, optional
+        Predictor, distance, assignment rule, gate and life cycle (default
+        :class:`TrackerConfig()`).
+
+    Raises
+    ------
+    ValueError
+        Unknown predictor, distance or assignment rule, or bad parameters.
+
+    Examples
+    --------
+    >>> from mvtrack.tracking import Tracker, TrackerConfig
+    >>> from mvtrack.types import Detections
+    >>> tracker = Tracker(TrackerConfig(confirm_hits=2))
+    >>> for k in range(3):
+    ...     out = tracker.step(Detections(k, [[10.0 + 2 * k, 20.0]], [[4.0, 3.0]]))
+    >>> out.track_id.tolist(), out.det_index.tolist()
+    ([1], [0])
+    """
+
+    def __init__(self, config: TrackerConfig | None = None) -> None:
+        self.config = TrackerConfig() if config is None else config
+        if not isinstance(self.config, TrackerConfig):
+            raise ValueError(f"Tracker: config must be a TrackerConfig, got {type(config)}")
+        self._fp = self.config.frames()
+        self.predictor = _build_predictor(self.config)
+        self._distance = get_distance(self.config.distance)
+        self._distance_params = dict(self.config.distance_params)
+        # the fast association path (mvtrack.tracking.associate) serves the disc-shaped gates
+        self._fast_gate: str | None = None
+        if not self._distance_params:
+            if self.config.distance == "euclidean":
+                self._fast_gate = "euclidean"
+            elif self.config.distance == "mahalanobis" and isinstance(
+                self.predictor, FastCVPredictor
+            ):
+                self._fast_gate = "mahalanobis"
+        self._assign_params = dict(self.config.assign_params)
+        self._gate = self._distance.gate if self.config.gate is None else float(self.config.gate)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every track; the next step starts from frame ``k = 0`` and ID 1."""
+        self.tracks = TrackTable.empty()
+        self.pstate = self.predictor.init(np.zeros((0, 2)))
+        self._k = 0
+        self.row_uids = np.zeros(0, dtype=np.int64)
+        self._next_uid = 0
+        self._next_id = 1
+
+    @property
+    def n_tracks(self) -> int:
+        """Number of live tracks (tentative included)."""
+        return len(self.tracks)
+
+    @property
+    def n_ids(self) -> int:
+        """Public IDs handed out so far."""
+        return self._next_id - 1
+
+    def step(self, dets: Detections, rescue: RescueFn | None = None) -> TrackFrame:
+        """Process one frame of detections; return the output rows of this frame.
+
+        Parameters
+        ----------
+        dets : Detections
+            This frame's detections (any row order; ``det_index`` in the output refers to it).
+        rescue : callable, optional
+            ``rescue(uids, predicted_xy, wh) -> (found, xy)``, consulted for the non-tentative
+            tracks that got no detection this frame; tracks with ``found`` True are updated
+            with ``xy`` and take state ``STOPPED`` (kept alive, same ID).
+
+        Returns
+        -------
+        TrackFrame
+            One row per live track with a public ID (and tentative ones with ID −1 if
+            ``config.output_tentative``): ``CONFIRMED`` rows carry the detection they used,
+            ``COASTING`` rows the prediction, ``STOPPED`` rows the template-match position.
+        """
+        fp = self._fp
+        k = self._k
+        tab = self.tracks
+        n = len(tab)
+        m = len(dets)
+        pred = self.predictor
+        out = None
+        ps = self.pstate
+        if n == 0:
+            ud = np.arange(m)
+        else:
+            ps = pred.predict(ps)  # time update, eqs. (6)–(7) of paper 1
+            gxy = pred.position(ps)
+            if fp.warmup_hits:
+                gxy = self._warmup_centre(tab, gxy, k)
+            if m == 0:
+                mt = md = ud = _EMPTY
+            elif self._fast_gate is not None:
+                mt, md, ud = self._associate_fast(ps, gxy, dets)
+            else:
+                mt, md, ud = self._associate(ps, gxy, tab, dets)
+            det_index = np.full(n, -1, dtype=np.int64)
+            det_index[mt] = md
+            z = np.full((n, 2), np.nan)
+            z[mt] = dets.xy[md]
+            matched = det_index >= 0
+            rescued = None
+            held, hi = matched, mt
+            if rescue is not None:
+                rescued = self._rescue(rescue, tab, gxy, matched, z)  # fills z in place
+                if rescued is not None:
+                    held = matched | rescued
+                    hi = np.flatnonzero(held)
+            ps = pred.update(ps, z, held)  # measurement update, eqs. (3)–(5) of paper 1
+            ints, flo = tab.ints.copy(), tab.floats.copy()
+            count_hits(ints, matched, hi)
+            ints[hi, PREV_K] = ints[hi, LAST_K]
+            ints[hi, LAST_K] = k
+            flo[hi, PREV_XY] = flo[hi, LAST_XY]
+            flo[hi, LAST_XY] = z[hi]
+            if mt.size:  # box size: exponential average of the associated detections
+                flo[mt, WH] += self.config.size_smoothing * (dets.wh[md] - flo[mt, WH])
+            state, delete, confirmed_now = next_state(ints, matched, rescued, fp)
+            ints[:, STATE] = state
+            if confirmed_now.any():
+                self._next_id = hand_out_ids(ints, confirmed_now, self._next_id)
+            show = ~delete if self.config.output_tentative else ~delete & (state != TENTATIVE)
+            rows = np.flatnonzero(show)
+            out = (
+                ints[rows, TID], state[rows], det_index[rows], z[rows],
+                pred.position(ps)[rows], gxy[rows], flo[rows, WH], pred.velocity(ps)[rows],
+            )
+            out_uid = ints[rows, UID]
+            tab = TrackTable(ints, flo)
+            if delete.any():
+                keep = np.flatnonzero(~delete)
+                tab = tab.take(keep)
+                ps = _take_state(ps, keep)
+        born = None
+        if ud.size:
+            tab, ps, born, born_uid = self._births(tab, ps, dets, ud, k)
+        self.tracks, self.pstate = tab, ps
+        self._k = k + 1
+        if born is None:
+            if out is None:
+                self.row_uids = np.zeros(0, dtype=np.int64)
+                return TrackFrame.empty(dets.frame)
+            self.row_uids = out_uid
+            return TrackFrame(dets.frame, *out)
+        if out is None:
+            self.row_uids = born_uid
+            return TrackFrame(dets.frame, *born)
+        self.row_uids = np.concatenate([out_uid, born_uid])
+        return TrackFrame(
+            dets.frame, *[np.concatenate([a, b]) for a, b in zip(out, born, strict=True)]
+        )
+
+    # ---------------------------------------------------------------------------- internals
+
+    def _associate(
+        self, ps: Any, gxy: FloatArray, tab: TrackTable, dets: Detections
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+        """Gate and assign through :mod:`mvtrack.association` (any distance and rule)."""
+        pred = self.predictor
+        view = TrackView(
+            gxy, pred.position_cov(ps), pred.innovation_cov(ps), pred.velocity(ps), tab.wh
+        )
+        ti, dj, cost = candidate_pairs(
+            view, dets, self._distance, self._gate, **self._distance_params
+        )
+        a = assign_pairs(ti, dj, cost, len(tab), len(dets), self.config.assign,
+                         **self._assign_params)
+        return a.track, a.det, a.unmatched_dets
+
+    def _associate_fast(
+        self, ps: Any, gxy: FloatArray, dets: Detections
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+        """Gate and assign through :mod:`mvtrack.tracking.associate` (disc-shaped gates)."""
+        n, m = gxy.shape[0], len(dets)
+        scale = None
+        if self._fast_gate == "mahalanobis":
+            scale = self.predictor.position_var(ps) + self.predictor.r  # S = (P̄ + r) I
+        rule = self.config.assign
+        if rule == "optimal" and not self._assign_params and n * m <= fast_assoc.DENSE_LSA:
+            mt, md = fast_assoc.dense_optimal(gxy, dets.xy, scale, self._gate)
+        elif rule == "optimal" and not self._assign_params:
+            ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate)
+            mt, md = fast_assoc.optimal(ti, dj, cost, n, m)
+        else:
+            ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate)
+            a = assign_pairs(ti, dj, cost, n, m, rule, **self._assign_params)
+            mt, md = a.track, a.det
+        used = np.zeros(m, dtype=bool)
+        used[md] = True
+        return mt, md, np.flatnonzero(~used)
+
+    def _warmup_centre(self, tab: TrackTable, pxy: FloatArray, k: int) -> FloatArray:
+        """Paper 1's warm-up gate centre (SPEC §1.1 [R]).
+
+        Until a track has ``2M = 6`` associations the gate centre is the linear extrapolation
+        of its last two measurements, ``2 y_k − y_{k−1}`` for consecutive frames (scaled by the
+        elapsed frames after misses), and ``y_k`` after a single association.
+        """
+        warm = tab.hits < self._fp.warmup_hits
+        if not warm.any():
+            return pxy
+        span = np.maximum(tab.last_k - tab.prev_k, 1)[:, None]
+        gap = (k - tab.last_k)[:, None]
+        last = tab.last_xy
+        centre = last + (last - tab.prev_xy) * (gap / span)  # 2y_k − y_{k−1}, SPEC §1.1 [R]
+        return np.where(warm[:, None], centre, pxy)
+
+    def _rescue(
+        self,
+        rescue: RescueFn,
+        tab: TrackTable,
+        gxy: FloatArray,
+        matched: BoolArray,
+        z: FloatArray,
+    ) -> BoolArray | None:
+        """Offer unmatched non-tentative tracks to ``rescue``; found positions go into ``z``."""
+        cand = np.flatnonzero(~matched & (tab.state != TENTATIVE))
+        if cand.size == 0:
+            return None
+        found, rxy = rescue(tab.uid[cand], gxy[cand], tab.wh[cand])
+        found = np.asarray(found, dtype=bool).reshape(-1)
+        rxy = np.asarray(rxy, dtype=np.float64).reshape(-1, 2)
+        if found.shape[0] != cand.size or rxy.shape[0] != cand.size:
+            raise ValueError(
+                f"rescue must return a mask and (K, 2) positions for the K={cand.size} tracks "
+                f"it was given; got {found.shape[0]} and {rxy.shape[0]} rows"
+            )
+        found &= np.isfinite(rxy).all(axis=1)
+        rescued = np.zeros(len(tab), dtype=bool)
+        sel = cand[found]
+        rescued[sel] = True
+        z[sel] = rxy[found]
+        return rescued
+
+    def _births(
+        self, tab: TrackTable, ps: Any, dets: Detections, ud: NDArray[np.intp], k: int
+    ) -> tuple[TrackTable, Any, tuple | None, IntArray]:
+        """New tentative tracks from the unassigned detections ``ud`` (SPEC §2.1 step 4)."""
+        xy = dets.xy[ud]
+        order = birth_order(xy)
+        ud, xy = ud[order], xy[order]
+        b = ud.size
+        new_ps = self.predictor.init(xy)
+        wh = dets.wh[ud]
+        ints = np.empty((b, N_INT), dtype=np.int64)
+        ints[:] = (0, -1, TENTATIVE, 1, 0, 1, k, k)
+        ints[:, UID] = np.arange(self._next_uid, self._next_uid + b)
+        self._next_uid += b
+        one = self._fp.confirm_hits <= 1
+        if one:  # confirmed by their first detection: public IDs now
+            ints[:, STATE] = CONFIRMED
+            ints[:, TID] = np.arange(self._next_id, self._next_id + b)
+            self._next_id += b
+        new = TrackTable(ints, np.concatenate([xy, xy, wh], axis=1))
+        born = None
+        if one or self.config.output_tentative:
+            born = (
+                ints[:, TID], ints[:, STATE], ud.astype(np.int64), xy,
+                self.predictor.position(new_ps), np.full((b, 2), np.nan), wh,
+                self.predictor.velocity(new_ps),
+            )
+        uid = ints[:, UID]
+        if len(tab) == 0:
+            return new, new_ps, born, uid
+        tab = TrackTable(
+            np.concatenate([tab.ints, new.ints]), np.concatenate([tab.floats, new.floats])
+        )
+        return tab, _concat_state(ps, new_ps), born, uid
+
+
+def track_detections(
+    frames: Iterable[Detections],
+    config: TrackerConfig | None = None,
+    rescue: RescueFn | None = None,
+) -> TrackLog:
+    """Run a fresh :class:`Tracker` over ``frames`` (one :class:`Detections` per frame).
+
+    Frames must come in increasing order; a frame index that skips ahead is filled with empty
+    frames so that the predictors advance one step per frame.
+    """
+    tracker = Tracker(config)
+    log = TrackLog()
+    last = None
+    for dets in frames:
+        if last is not None:
+            if dets.frame <= last:
+                raise ValueError(
+                    f"track_detections: frame {dets.frame} does not follow frame {last}"
+                )
+            for f in range(last + 1, dets.frame):
+                log.append(tracker.step(Detections.empty(f), rescue))
+        log.append(tracker.step(dets, rescue))
+        last = dets.frame
+    return log

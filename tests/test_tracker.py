@@ -1,0 +1,310 @@
+"""Exact-identity scenarios of the tracker: crossing, gaps, birth and death, shuffled input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mvtrack.tracking import Tracker, TrackerConfig, TrackLog, paper1, track_detections
+from mvtrack.types import Detections, TrackState
+
+WH = np.array([[20.0, 15.0]])
+
+
+def _frames(paths: dict[int, np.ndarray], n_frames: int, skip=None) -> list[Detections]:
+    """Detections of targets ``paths[i]`` (n_frames, 2; NaN = absent), rows in target order."""
+    out = []
+    for k in range(n_frames):
+        xy = [p[k] for i, p in sorted(paths.items()) if np.isfinite(p[k]).all()]
+        if skip is not None:
+            xy = [z for i, z in enumerate(xy) if (k, i) not in skip]
+        xy = np.array(xy).reshape(-1, 2)
+        out.append(Detections(k, xy, np.repeat(WH, len(xy), axis=0)))
+    return out
+
+
+def _line(start, velocity, n) -> np.ndarray:
+    return np.asarray(start, float) + np.arange(n)[:, None] * np.asarray(velocity, float)
+
+
+def _id_of_target(log: TrackLog, frames: list[Detections], target_xy: np.ndarray) -> np.ndarray:
+    """Per frame, the ID of the row whose detection is the target's (0 when none)."""
+    ids = np.zeros(len(frames), dtype=np.int64)
+    for k, tf in enumerate(log):
+        for tid, j in zip(tf.track_id, tf.det_index, strict=True):
+            if j >= 0 and np.allclose(frames[k].xy[j], target_xy[k]):
+                ids[k] = tid
+    return ids
+
+
+CONFIGS = {
+    "default": TrackerConfig(),
+    "kalman-ca+euclidean+greedy": TrackerConfig(
+        predictor="kalman-ca", distance="euclidean", gate=400.0, assign="greedy"
+    ),
+    "rls+uncoupled+optimal": TrackerConfig(predictor="rls", distance="uncoupled", gate=50.0),
+    "coupled+mahalanobis+nearest": TrackerConfig(
+        predictor="kalman-coupled", assign="nearest", gate=30.0
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+def test_two_crossing_targets_keep_their_ids(name: str) -> None:
+    n = 60
+    a = _line([100.0, 300.0], [4.0, 0.0], n)  # left to right
+    b = _line([100.0, 422.0], [4.0, -4.0], n)  # lower left to upper right, crosses a at k≈30
+    frames = _frames({0: a, 1: b}, n)
+    log = track_detections(frames, CONFIGS[name])
+    ida = _id_of_target(log, frames, a)
+    idb = _id_of_target(log, frames, b)
+    confirmed = slice(CONFIGS[name].confirm_hits - 1, n)
+    # the same ID follows each target through the crossing, and the two IDs differ
+    assert len(set(ida[confirmed])) == 1 and len(set(idb[confirmed])) == 1
+    assert ida[-1] != idb[-1] and {ida[-1], idb[-1]} == {1, 2}
+    assert log.track_ids.tolist() == [1, 2]
+
+
+def test_gap_is_bridged_by_coasting_with_the_same_id() -> None:
+    n = 50
+    a = _line([50.0, 50.0], [3.0, 1.0], n)
+    a[20:26] = np.nan  # six missed frames (0.2 s at 30 fps; max_coast is 1 s)
+    frames = _frames({0: a}, n)
+    log = track_detections(frames, TrackerConfig())
+    assert log.track_ids.tolist() == [1]
+    for k, tf in enumerate(log):
+        if k < 2:
+            assert len(tf) == 0  # tentative, not output
+            continue
+        assert tf.track_id.tolist() == [1]
+        if 20 <= k < 26:
+            assert tf.state.tolist() == [TrackState.COASTING]
+            assert tf.det_index.tolist() == [-1]
+            assert np.isnan(tf.measured_xy).all()
+            # the predicted box is output: it continues the motion
+            np.testing.assert_allclose(tf.filtered_xy[0], [50 + 3 * k, 50 + k], atol=0.5)
+        else:
+            assert tf.state.tolist() == [TrackState.CONFIRMED]
+            assert tf.det_index.tolist() == [0]
+            np.testing.assert_array_equal(tf.measured_xy[0], a[k])
+
+
+def test_birth_and_death_at_the_right_frames() -> None:
+    n = 60
+    a = np.full((n, 2), np.nan)
+    a[5:31] = _line([200.0, 100.0], [2.0, 2.0], 26)  # present in frames 5..30
+    config = TrackerConfig(confirm_hits=3, max_coast=0.2)  # coasts 6 frames at 30 fps
+    log = track_detections(_frames({0: a}, n), config)
+    shown = [k for k, tf in enumerate(log) if len(tf)]
+    # born at 5, confirmed on its 3rd hit (frame 7), coasts 31..36, deleted at 37
+    assert shown == list(range(7, 37))
+    states = {k: int(log[k].state[0]) for k in shown}
+    assert all(states[k] == TrackState.CONFIRMED for k in range(7, 31))
+    assert all(states[k] == TrackState.COASTING for k in range(31, 37))
+
+
+def test_tentative_tracks_are_output_with_id_minus_one_when_asked() -> None:
+    a = _line([10.0, 10.0], [1.0, 0.0], 5)
+    log = track_detections(_frames({0: a}, 5), TrackerConfig(output_tentative=True))
+    assert [tf.track_id.tolist() for tf in log] == [[-1], [-1], [1], [1], [1]]
+    assert [int(tf.state[0]) for tf in log] == [0, 0, 1, 1, 1]
+    assert log.to_mot()[:, 0].tolist() == [3, 4, 5]  # tentative rows are never written
+
+
+def test_confirmation_needs_hits_within_the_window() -> None:
+    a = _line([10.0, 10.0], [1.0, 0.0], 12)
+    a[1] = a[3] = np.nan  # hits at 0, 2, 4, 5, ...
+    strict = track_detections(_frames({0: a}, 12), TrackerConfig(confirm_hits=3))
+    # consecutive hits required: the track born at 0 dies at its first miss, and so on
+    assert strict.track_ids.tolist() == [1]
+    assert next(k for k, tf in enumerate(strict) if len(tf)) == 6
+    lenient = track_detections(
+        _frames({0: a}, 12),
+        TrackerConfig(confirm_hits=3, confirm_window=5 / 30, tentative_max_coast=1 / 30),
+    )
+    assert next(k for k, tf in enumerate(lenient) if len(tf)) == 4
+
+
+def _random_scene(rng: np.random.Generator, n_targets: int, n_frames: int):
+    p = rng.uniform(0, 600, (n_targets, 2))
+    v = rng.uniform(-3, 3, (n_targets, 2))
+    frames = []
+    for k in range(n_frames):
+        seen = rng.random(n_targets) > 0.1
+        xy = p[seen] + (k * v[seen]) + rng.normal(0, 1.0, (int(seen.sum()), 2))
+        clutter = rng.uniform(0, 600, (rng.poisson(2), 2))
+        xy = np.vstack([xy, clutter])
+        wh = np.tile([20.0, 15.0], (len(xy), 1)) + rng.normal(0, 0.5, (len(xy), 2))
+        frames.append(Detections(k, xy, wh))
+    return frames
+
+
+@pytest.mark.parametrize("assign", ["nearest", "greedy", "optimal"])
+def test_shuffled_detection_order_gives_identical_tracks(assign: str) -> None:
+    rng = np.random.default_rng(7)
+    frames = _random_scene(rng, 30, 40)
+    perms = [rng.permutation(len(d)) for d in frames]
+    shuffled = [d.take(p) for d, p in zip(frames, perms, strict=True)]
+    config = TrackerConfig(assign=assign, predictor_params={"r": 1.0})
+    a = track_detections(frames, config)
+    b = track_detections(shuffled, config)
+    assert a.track_ids.size > 20
+    for ta, tb, p in zip(a, b, perms, strict=True):
+        oa, ob = np.argsort(ta.track_id), np.argsort(tb.track_id)
+        np.testing.assert_array_equal(ta.track_id[oa], tb.track_id[ob])
+        np.testing.assert_array_equal(ta.state[oa], tb.state[ob])
+        np.testing.assert_array_equal(ta.filtered_xy[oa], tb.filtered_xy[ob])
+        # det_index refers to each input's own row order
+        ja, jb = ta.det_index[oa], tb.det_index[ob]
+        np.testing.assert_array_equal(ja, np.where(jb >= 0, p[jb], -1))
+
+
+def test_rows_link_to_the_detection_they_used() -> None:
+    rng = np.random.default_rng(3)
+    frames = _random_scene(rng, 15, 30)
+    log = track_detections(frames, TrackerConfig())
+    n_linked = 0
+    for tf, dets in zip(log, frames, strict=True):
+        linked = tf.det_index >= 0
+        n_linked += int(linked.sum())
+        np.testing.assert_array_equal(tf.measured_xy[linked], dets.xy[tf.det_index[linked]])
+        assert np.all(tf.state[linked] == TrackState.CONFIRMED)
+        assert np.all(tf.state[~linked] == TrackState.COASTING)
+        assert np.isnan(tf.measured_xy[~linked]).all()
+        # one detection per track under exclusive assignment
+        assert len(set(tf.det_index[linked].tolist())) == int(linked.sum())
+    assert n_linked > 300
+
+
+def test_ids_are_consecutive_from_one() -> None:
+    rng = np.random.default_rng(11)
+    log = track_detections(_random_scene(rng, 25, 30), TrackerConfig())
+    ids = log.track_ids
+    np.testing.assert_array_equal(ids, np.arange(1, ids.size + 1))
+    # IDs appear in order of confirmation
+    first_seen = [int(np.flatnonzero(log.columns()["track_id"] == i)[0]) for i in ids]
+    assert first_seen == sorted(first_seen)
+
+
+@pytest.mark.parametrize("fps", [10.0, 30.0])
+def test_physical_units_give_the_same_behaviour_at_10_and_30_fps(fps: float) -> None:
+    seconds = 4.0
+    n = int(seconds * fps)
+    t = np.arange(n) / fps
+    a = np.stack([100 + 60 * t, 200 + 30 * t], axis=1)  # 60 px/s, 30 px/s
+    gone_short = (t >= 1.0) & (t < 1.4)  # a 0.4 s gap: bridged (max_coast 0.5 s)
+    gone_long = (t >= 2.5) & (t < 3.2)  # a 0.7 s gap: the track is lost
+    a[gone_short | gone_long] = np.nan
+    config = TrackerConfig(
+        fps=fps, max_coast=0.5, confirm_hits=2, init_velocity_std=120.0, accel_std=30.0,
+        distance="euclidean", gate=15.0**2,
+    )
+    log = track_detections(_frames({0: a}, n), config)
+    c = log.columns()
+    ids_by_time = {}
+    for k, tf in enumerate(log):
+        ids_by_time[round(t[k], 2)] = tf.track_id.tolist()
+    assert log.track_ids.tolist() == [1, 2]
+    assert ids_by_time[1.2] == [1]  # coasting through the short gap
+    assert ids_by_time[1.5] == [1]
+    # coasts 0.5 s after its last detection at t = 2.5 - 1/fps, then is deleted
+    assert ids_by_time[2.9] == [1] and ids_by_time[3.0] == []
+    assert ids_by_time[3.5] == [2]
+    t_coast = t[c["frame"][c["state"] == TrackState.COASTING]]
+    last_coast_of_1 = t_coast[t_coast < 3.2].max()
+    assert last_coast_of_1 == pytest.approx(2.5 - 1 / fps + 0.5, abs=1e-9)
+
+
+def test_rescue_holds_a_stopped_track_and_a_detection_confirms_it_again() -> None:
+    n = 60
+    a = _line([100.0, 100.0], [2.0, 0.0], n)
+    a[20:] = a[20]  # the vehicle stops at frame 20 ...
+    detected = np.ones(n, bool)
+    detected[22:45] = False  # ... fades into the background, then moves on
+    a[45:] = a[20] + np.arange(1, n - 44)[:, None] * [2.0, 0.0]
+    frames = _frames({0: np.where(detected[:, None], a, np.nan)}, n)
+    calls = []
+
+    def rescue(uids, xy, wh):
+        calls.append((uids.copy(), xy.copy(), wh.copy()))
+        return np.ones(len(uids), bool), np.repeat(a[20][None], len(uids), axis=0)
+
+    tracker = Tracker(TrackerConfig(max_coast=0.1))  # would be deleted after 3 misses
+    out = [tracker.step(d, rescue=rescue) for d in frames]
+    assert all(tf.track_id.tolist() == [1] for tf in out[2:])
+    states = [int(tf.state[0]) for tf in out[2:]]
+    assert states[22 - 2 : 45 - 2] == [TrackState.STOPPED] * 23
+    assert states[45 - 2 :] == [TrackState.CONFIRMED] * (n - 45)
+    assert len(calls) == 23 and all(c[0].tolist() == [0] for c in calls)
+    np.testing.assert_array_equal(calls[0][2], WH)
+    stopped = out[30]
+    assert stopped.det_index.tolist() == [-1]
+    np.testing.assert_array_equal(stopped.measured_xy[0], a[20])
+
+
+def test_rescue_is_not_offered_tentative_tracks_and_unfound_tracks_coast() -> None:
+    a = _line([10.0, 10.0], [1.0, 0.0], 10)
+    a[5:] = np.nan
+    seen = []
+
+    def rescue(uids, xy, wh):
+        seen.append(uids.tolist())
+        return np.zeros(len(uids), bool), np.full((len(uids), 2), np.nan)
+
+    tracker = Tracker(TrackerConfig())
+    out = [tracker.step(d, rescue=rescue) for d in _frames({0: a}, 10)]
+    assert seen == [[0]] * 5
+    assert [int(tf.state[0]) for tf in out[5:]] == [TrackState.COASTING] * 5
+
+
+def test_paper1_warmup_gate_centre_is_the_linear_extrapolation() -> None:
+    a = _line([50.0, 60.0], [3.0, -1.0], 12)
+    a += np.random.default_rng(0).normal(0, 0.3, a.shape)
+    log = track_detections(_frames({0: a}, 12), paper1("kalman-ca"))
+    assert log.track_ids.tolist() == [1]
+    np.testing.assert_array_equal(log[1].predicted_xy[0], a[0])  # y_k after one association
+    for k in range(2, 6):  # hits 2..5 < 2M = 6: centre 2 y_{k-1} − y_{k-2}
+        np.testing.assert_allclose(log[k].predicted_xy[0], 2 * a[k - 1] - a[k - 2], rtol=1e-12)
+    assert not np.allclose(log[7].predicted_xy[0], 2 * a[6] - a[5])  # the filter's own now
+
+
+def test_paper1_nearest_is_non_exclusive() -> None:
+    a = _line([100.0, 100.0], [2.0, 0.0], 10)
+    b = _line([100.0, 110.0], [2.0, 0.0], 10)
+    b[5:] = np.nan  # b disappears; both tracks now take a's detection (paper 1 rule)
+    log = track_detections(_frames({0: a, 1: b}, 10), paper1("kalman-ca"))
+    assert log[6].det_index.tolist() == [0, 0]
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [
+        {"fps": 0.0}, {"fps": float("nan")}, {"gate": -1.0}, {"confirm_hits": 0},
+        {"max_coast": -0.1}, {"assign": "hungarian"}, {"size_smoothing": 0.0},
+        {"confirm_window": 0.0}, {"init_velocity_std": -5.0}, {"warmup_hits": 1},
+        {"predictor": ""}, {"predictor_params": [1, 2]},
+    ],
+)
+def test_bad_config_values_raise_value_error(changes: dict) -> None:
+    with pytest.raises(ValueError, match=next(iter(changes))):
+        TrackerConfig(**changes)
+
+
+@pytest.mark.parametrize(
+    "changes, word",
+    [({"predictor": "kalman-xx"}, "kalman-xx"), ({"distance": "manhattan"}, "manhattan"),
+     ({"predictor_params": {"r": -1.0}}, "r")],
+)
+def test_unknown_names_raise_value_error(changes: dict, word: str) -> None:
+    with pytest.raises(ValueError, match=word):
+        Tracker(TrackerConfig(**changes))
+
+
+def test_track_detections_fills_skipped_frames_and_rejects_disorder() -> None:
+    a = _line([10.0, 10.0], [1.0, 0.0], 6)
+    frames = _frames({0: a}, 6)
+    log = track_detections([frames[0], frames[1], frames[2], frames[5]], TrackerConfig())
+    assert [tf.frame for tf in log] == [0, 1, 2, 3, 4, 5]
+    assert [int(tf.state[0]) for tf in log[2:]] == [1, 2, 2, 1]
+    with pytest.raises(ValueError, match="frame 1"):
+        track_detections([frames[2], frames[1]], TrackerConfig())
