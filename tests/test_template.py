@@ -34,7 +34,7 @@ def _centre(tl: tuple[int, int]) -> np.ndarray:
 
 
 def _bank_with_vehicle(tl=(50, 40), uid: int = 7) -> TemplateBank:
-    bank = TemplateBank()
+    bank = TemplateBank(min_travel=0)
     bank.observe(_frame(tl, seed=1), [uid], [_centre(tl)], [[VW, VH]])
     return bank
 
@@ -73,7 +73,7 @@ def test_rescue_searches_only_inside_the_circular_gate() -> None:
 
 
 def test_only_the_tracks_with_templates_are_searched_and_order_is_kept() -> None:
-    bank = TemplateBank()
+    bank = TemplateBank(min_travel=0)
     a, b = (20, 20), (100, 80)
     img = _frame(a, seed=1)
     img[b[1] : b[1] + VH, b[0] : b[0] + VW] = 255 - _vehicle()[..., None]
@@ -109,7 +109,7 @@ def test_template_is_refreshed_when_the_track_is_detected_again() -> None:
 
 
 def test_flat_or_tiny_boxes_keep_no_template() -> None:
-    bank = TemplateBank()
+    bank = TemplateBank(min_travel=0)
     flat = np.full((H, W, 3), 90, np.uint8)
     bank.observe(flat, [1, 2], [[50, 50], [80, 80]], [[20, 20], [2, 2]])
     assert bank.template(1) is None and bank.template(2) is None
@@ -118,7 +118,7 @@ def test_flat_or_tiny_boxes_keep_no_template() -> None:
 
 
 def test_drop_and_retain_forget_deleted_tracks() -> None:
-    bank = TemplateBank()
+    bank = TemplateBank(min_travel=0)
     img = _frame((50, 40), seed=1)
     bank.observe(img, [3, 1, 2], [_centre((50, 40))] * 3, [[VW, VH]] * 3)
     assert bank.uids.tolist() == [1, 2, 3]
@@ -137,11 +137,29 @@ def test_bind_gives_the_tracker_callback_signature() -> None:
     assert found.tolist() == [True] and xy.shape == (1, 2)
 
 
+def test_only_tracks_that_travelled_a_box_length_are_searched() -> None:
+    # a track that never moved (clutter, a ghost) would match the static scene for ever
+    bank = TemplateBank()  # min_travel = 1 box length
+    still = (50, 40)
+    for k in range(5):
+        bank.observe(_frame(still, seed=k), [7], [_centre(still)], [[VW, VH]])
+    assert bank.eligible.tolist() == [False]
+    assert not bank.rescue(_frame(still, seed=9), [7], [_centre(still)])[0][0]
+    # the same vehicle arriving from 20 px away (> its 18 px length) is searched
+    bank = TemplateBank()
+    for x in range(30, 51, 2):
+        bank.observe(_frame((x, 40), seed=x), [7], [_centre((x, 40))], [[VW, VH]])
+    assert bank.eligible.tolist() == [True]
+    assert bank.rescue(_frame(still, seed=9), [7], [_centre(still)])[0][0]
+
+
 def test_bad_parameters_are_value_errors() -> None:
     with pytest.raises(ValueError, match="min_score"):
         TemplateBank(min_score=1.5)
     with pytest.raises(ValueError, match="gate_radius"):
         TemplateBank(gate_radius=-1)
+    with pytest.raises(ValueError, match="min_travel"):
+        TemplateBank(min_travel=-1)
     with pytest.raises(ValueError, match="one row per track"):
         TemplateBank().observe(_frame(None), [1, 2], [[1, 1]], [[1, 1]])
 
@@ -159,7 +177,8 @@ def _stop_and_go(n: int, stop: int, go: int, enter: int = 15):
 
 
 def _run(with_templates: bool, n: int = 200, stop: int = 45, go: int = 185):
-    tracking = pytest.importorskip("mvtrack.tracking")
+    pytest.importorskip("mvtrack.tracking.tracker")
+    from mvtrack import tracking
     from mvtrack.detection import DisturbanceMap
 
     tracker = tracking.Tracker(tracking.preset("paper1", fps=30))
@@ -216,7 +235,8 @@ def test_without_templates_the_stopped_vehicle_track_ends() -> None:
 
 
 def test_gate_radius_follows_a_euclidean_tracker_gate() -> None:
-    tracking = pytest.importorskip("mvtrack.tracking")
+    pytest.importorskip("mvtrack.tracking.tracker")
+    from mvtrack import tracking
     tracker = tracking.Tracker(tracking.paper1(fps=30, gate_px=10.0))
     assert gate_radius_of(tracker, 20.0) == pytest.approx(10.0)
     assert TemplateRescuer(TemplateBank(), tracker).gate_radius == pytest.approx(10.0)

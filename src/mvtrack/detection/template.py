@@ -77,6 +77,13 @@ class TemplateBank:
     min_std : float, default 2.0
         Templates whose grey-level standard deviation is below this are not kept (a flat
         patch has no defined NCC).
+    min_travel : float, default 1.0
+        A track is searched only after its detections have moved at least this many box
+        lengths (the larger side of its last box) from where it was first observed. A
+        template of a static place always matches the static scene, so without this guard
+        every spurious track on clutter, and every "ghost" left where a parked object drove
+        off, would be held for ever; a vehicle that *stops* has always driven there first.
+        0 disables the guard.
 
     Attributes
     ----------
@@ -90,6 +97,7 @@ class TemplateBank:
         gate_radius: float = 20.0,
         min_size: int = 4,
         min_std: float = 2.0,
+        min_travel: float = 1.0,
     ) -> None:
         if not (-1.0 <= min_score <= 1.0):
             raise ValueError(f"min_score must be an NCC in [-1, 1], got {min_score}")
@@ -99,10 +107,13 @@ class TemplateBank:
             raise ValueError(f"min_size must be ≥ 1 px, got {min_size}")
         if not min_std >= 0:
             raise ValueError(f"min_std must be ≥ 0, got {min_std}")
+        if not (math.isfinite(min_travel) and min_travel >= 0):
+            raise ValueError(f"min_travel must be ≥ 0 box lengths, got {min_travel}")
         self.min_score = float(min_score)
         self.gate_radius = float(gate_radius)
         self.min_size = int(min_size)
         self.min_std = float(min_std)
+        self.min_travel = float(min_travel)
         self.clear()
 
     # ------------------------------------------------------------------ bookkeeping (arrays)
@@ -111,6 +122,8 @@ class TemplateBank:
         self.uids = np.zeros(0, np.int64)
         self._box = np.zeros((0, 4))  # x, y, w, h of the last detection
         self._det_tick = np.zeros(0, np.int64)  # tick of the last detection
+        self._origin = np.zeros((0, 2))  # first observed centre
+        self._travel = np.zeros(0)  # largest distance from the origin so far
         self._templates: dict[int, _Template] = {}
         self._tick = -1
         self._frame: Image | None = None  # the frame of tick ``_tick``
@@ -155,16 +168,27 @@ class TemplateBank:
         known = pos < self.uids.size
         known[known] = self.uids[pos[known]] == uids[known]
         # refresh known tracks in place, insert the new ones (kept sorted)
-        self._box[pos[known]] = box[known]
-        self._det_tick[pos[known]] = self._tick
+        pk = pos[known]
+        self._box[pk] = box[known]
+        self._det_tick[pk] = self._tick
+        moved = np.hypot(*(xy[known] - self._origin[pk]).T)
+        self._travel[pk] = np.maximum(self._travel[pk], moved)
         new = ~known
         if new.any():
             allu = np.concatenate([self.uids, uids[new]])
             order = np.argsort(allu, kind="stable")
+            nn = int(new.sum())
             self.uids = allu[order]
             self._box = np.vstack([self._box, box[new]])[order]
-            tick = np.full(int(new.sum()), self._tick, np.int64)
+            tick = np.full(nn, self._tick, np.int64)
             self._det_tick = np.concatenate([self._det_tick, tick])[order]
+            self._origin = np.vstack([self._origin, xy[new]])[order]
+            self._travel = np.concatenate([self._travel, np.zeros(nn)])[order]
+
+    @property
+    def eligible(self) -> BoolArray:
+        """Per track in :attr:`uids`: has it travelled ``min_travel`` box lengths?"""
+        return self._travel >= self.min_travel * self._box[:, 2:].max(axis=1, initial=0.0)
 
     def retain(self, uids: ArrayLike) -> None:
         """Keep only the tracks in ``uids`` (the live ones); forget deleted tracks."""
@@ -177,11 +201,11 @@ class TemplateBank:
     def _keep(self, keep: BoolArray) -> None:
         for u in self.uids[~keep].tolist():
             self._templates.pop(u, None)
-        self.uids, self._box, self._det_tick = (
-            self.uids[keep],
-            self._box[keep],
-            self._det_tick[keep],
-        )
+        self.uids = self.uids[keep]
+        self._box = self._box[keep]
+        self._det_tick = self._det_tick[keep]
+        self._origin = self._origin[keep]
+        self._travel = self._travel[keep]
 
     # ------------------------------------------------------------------------- templates
     def _cut(self, i: int) -> _Template | None:
@@ -263,7 +287,8 @@ class TemplateBank:
         Returns
         -------
         found : (K,) bool
-            NCC ≥ ``min_score`` inside the gate.
+            NCC ≥ ``min_score`` inside the gate (always False for tracks without a template
+            or that have not travelled ``min_travel`` box lengths).
         xy : (K, 2) float64
             Centre of the best match (NaN where not found).
         score : (K,) float64
@@ -284,6 +309,7 @@ class TemplateBank:
         has = pos < self.uids.size
         has[has] = self.uids[pos[has]] == uids[has]
         has &= np.isfinite(pxy).all(axis=1)
+        has[has] = self.eligible[pos[has]]  # tracks that have driven somewhere
         height, width = frame.shape[:2]
         ri = math.floor(r)
         for j in np.flatnonzero(has).tolist():  # the missed tracks only
