@@ -273,24 +273,38 @@ def segment_parts(
 def adjacency(labels: NDArray[np.int32], min_shared: int = 3, gap: int = 2) -> IntArray:
     """Adjacent part pairs (E, 2), i < j (1-based labels), by shared boundary pixels.
 
-    A pixel of part a on the boundary with part b is one whose neighbour at horizontal or
-    vertical distance ≤ ``gap`` is in b (``gap`` > 1 bridges thin unlabelled seams such as
-    achromatic pixels between parts). Pairs with ≥ ``min_shared`` such pixels are adjacent.
+    A pixel of part a is on its boundary with part b when a pixel of b lies at horizontal or
+    vertical distance ≤ ``gap`` (``gap`` > 1 bridges thin unlabelled seams, e.g. achromatic
+    pixels between two parts). Parts a and b are adjacent when both have ≥ ``min_shared``
+    such boundary pixels (SPEC §3.3: ≥ 3).
     """
     lab = np.asarray(labels)
-    pairs = []
+    H, W = lab.shape
+    flat_idx = np.arange(H * W).reshape(H, W)
+    rows = []
     for d in range(1, gap + 1):
-        for a, b in ((lab[:, :-d], lab[:, d:]), (lab[:-d, :], lab[d:, :])):
+        for a, b, ia, ib in (
+            (lab[:, :-d], lab[:, d:], flat_idx[:, :-d], flat_idx[:, d:]),
+            (lab[:-d, :], lab[d:, :], flat_idx[:-d, :], flat_idx[d:, :]),
+        ):
             sel = (a > 0) & (b > 0) & (a != b)
-            pa, pb = a[sel], b[sel]
-            pairs.append(np.stack([np.minimum(pa, pb), np.maximum(pa, pb)], axis=1))
-    allp = np.concatenate(pairs) if pairs else np.zeros((0, 2), int)
-    if allp.size == 0:
+            pa, pb, qa, qb = a[sel], b[sel], ia[sel], ib[sel]
+            lo, hi = np.minimum(pa, pb), np.maximum(pa, pb)
+            # (pair, which end, pixel): each boundary pixel once per pair and side
+            rows.append(np.stack([lo, hi, (pa > pb).astype(int), qa], axis=1))
+            rows.append(np.stack([lo, hi, (pb > pa).astype(int), qb], axis=1))
+    allr = np.concatenate(rows) if rows else np.zeros((0, 4), int)
+    if allr.size == 0:
         return np.zeros((0, 2), dtype=np.intp)
-    uniq, counts = np.unique(allp, axis=0, return_counts=True)
-    # each boundary pixel pair is seen once per distance; count distinct pixel pairs at d = 1
-    # or bridged gaps, which is what "shared boundary pixels" means here
-    return uniq[counts >= min_shared].astype(np.intp)
+    uniq = np.unique(allr, axis=0)  # distinct boundary pixels
+    keys, counts = np.unique(uniq[:, :3], axis=0, return_counts=True)
+    pairs, side_counts = keys[:, :2], counts
+    # both sides of a pair must have enough boundary pixels
+    pu, inv = np.unique(pairs, axis=0, return_inverse=True)
+    least = np.full(len(pu), np.iinfo(np.int64).max)
+    np.minimum.at(least, inv.ravel(), side_counts)
+    n_sides = np.bincount(inv.ravel(), minlength=len(pu))
+    return pu[(n_sides == 2) & (least >= min_shared)].astype(np.intp)
 
 
 # --------------------------------------------------------------------------- features, α
