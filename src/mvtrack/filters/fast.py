@@ -64,13 +64,18 @@ def unpack(p: FloatArray, n: int) -> FloatArray:
     return p[..., packed_index(n)]
 
 
-def _chunked(fn: Callable[..., None], arrays: list[FloatArray], B: int) -> None:
-    """Call ``fn`` on column slices ``[s:s+CHUNK]`` of every array (all with last dim B)."""
-    if B <= CHUNK:
-        fn(*arrays)
-        return
+def _chunked(fn: Callable[..., None], arrays: list[np.ndarray], B: int, n_scratch: int) -> None:
+    """Call ``fn(scratch, *slices)`` on column slices ``[s:s+CHUNK]`` of every array.
+
+    ``scratch`` is a list of ``n_scratch`` float vectors of the chunk's length, reused across
+    chunks (no allocation per chunk).
+    """
+    size = min(B, CHUNK)
+    buf = np.empty((n_scratch, size))
     for s in range(0, B, CHUNK):
-        fn(*[a[..., s : s + CHUNK] for a in arrays])
+        e = min(s + CHUNK, B)
+        scratch = [row[: e - s] for row in buf]
+        fn(scratch, *[a[..., s:e] for a in arrays])
 
 
 def _lincomb(terms: list[tuple[float, FloatArray]], out: FloatArray, tmp: FloatArray) -> None:
@@ -115,20 +120,24 @@ def kf_axis_predict(
     x_out = np.empty_like(x)
     p_out = np.empty_like(p)
 
-    def kernel(xc: FloatArray, pc: FloatArray, xo: FloatArray, po: FloatArray) -> None:
-        tmp = np.empty(xc.shape[1])
+    # which entries A_il of A = F P some upper-triangle P'_ij (j ≥ i) needs
+    need = [sorted({ll for j in range(i, n) for ll in range(n) if F[j, ll] != 0.0})
+            for i in range(n)]
+    n_tmp = 1 + sum(len(nd) for nd in need)
+
+    def kernel(sc: list[FloatArray], xc: FloatArray, pc: FloatArray, xo: FloatArray,
+               po: FloatArray) -> None:
+        tmp, free = sc[0], iter(sc[1:])
         for i in range(n):  # eq. (6)
             _lincomb([(F[i, k], xc[k]) for k in range(n) if F[i, k] != 0.0], xo[i], tmp)
-        # A = F P, only the entries A_il that some upper-triangle P'_ij (j ≥ i) needs
         A: dict[tuple[int, int], FloatArray] = {}
         for i in range(n):
-            need = {ll for j in range(i, n) for ll in range(n) if F[j, ll] != 0.0}
-            for ll in sorted(need):
+            for ll in need[i]:
                 terms = [(F[i, k], pc[idx[k, ll]]) for k in range(n) if F[i, k] != 0.0]
                 if len(terms) == 1 and terms[0][0] == 1.0:
                     A[i, ll] = terms[0][1]
                 else:
-                    A[i, ll] = np.empty(xc.shape[1])
+                    A[i, ll] = next(free)
                     _lincomb(terms, A[i, ll], tmp)
         for i in range(n):  # eq. (7): P' = A Fᵀ + Q, upper triangle
             for j in range(i, n):
@@ -137,7 +146,7 @@ def kf_axis_predict(
                 if Q[i, j] != 0.0:
                     out += Q[i, j]
 
-    _chunked(kernel, [x, p, x_out, p_out], B)
+    _chunked(kernel, [x, p, x_out, p_out], B, n_tmp)
     return x_out, p_out
 
 
@@ -164,18 +173,23 @@ def kf_axis_update(
     """
     n, B = x.shape
     idx = packed_index(n)
-    x_out = x.copy()
-    p_out = p.copy()
-    okf = ok.astype(np.float64)
-    z_safe = np.where(ok, z, x[0])  # a missing measurement never enters the arithmetic
+    x_out = np.empty_like(x)
+    p_out = np.empty_like(p)
+    miss = ~(ok & np.isfinite(z))  # a missing measurement never enters the arithmetic
 
-    def kernel(xo: FloatArray, po: FloatArray, zc: FloatArray, okc: FloatArray) -> None:
-        g = po[idx[0, 0]] + r  # S
-        np.divide(okc, g, out=g)  # ok / S: zero gain where there is no measurement
-        nu = zc - xo[0]  # innovation
+    def kernel(sc: list[FloatArray], xi: FloatArray, pi: FloatArray, zc: FloatArray,
+               mc: BoolArray, xo: FloatArray, po: FloatArray) -> None:
+        np.copyto(xo, xi)
+        np.copyto(po, pi)
+        g, nu, tmp, k = sc[0], sc[1], sc[2], sc[3:]
+        np.add(po[idx[0, 0]], r, out=g)  # eq. (3): S = P₀₀ + r
+        np.divide(1.0, g, out=g)
+        np.copyto(g, 0.0, where=mc)  # zero gain where there is no measurement
+        np.subtract(zc, xo[0], out=nu)  # innovation z − H x̄
+        np.copyto(nu, 0.0, where=mc)
         nu *= g
-        k = [po[idx[0, i]] * g for i in range(n)]  # eq. (3), K_i = P_0i / S
-        tmp = np.empty_like(nu)
+        for i in range(n):  # eq. (3): K_i = P_0i / S
+            np.multiply(po[idx[0, i]], g, out=k[i])
         for i in range(n):  # eq. (4)
             np.multiply(po[idx[0, i]], nu, out=tmp)
             xo[i] += tmp
@@ -184,7 +198,7 @@ def kf_axis_update(
                 np.multiply(k[i], po[idx[0, j]], out=tmp)
                 po[idx[i, j]] -= tmp
 
-    _chunked(kernel, [x_out, p_out, z_safe, okf], B)
+    _chunked(kernel, [x, p, z, miss, x_out, p_out], B, 3 + n)
     return x_out, p_out
 
 
@@ -228,65 +242,70 @@ def rls_step(
     """
     M, B = w.shape
     idx = packed_index(M)
-    w_out = w.copy()
-    p_out = p.copy()
+    w_out = np.empty_like(w)
+    p_out = np.empty_like(p)
     taps_out = np.empty_like(taps)
     alpha = np.empty(B)
     y_in = np.asarray(y, dtype=np.float64)
-    ok = ok & np.isfinite(y_in)
-    okf = ok.astype(np.float64)
+    miss = ~(ok & np.isfinite(y_in))
     inv_lam = 1.0 / lam
-    fill_in = np.full(B, np.nan) if fill is None else np.asarray(fill, dtype=np.float64)
-    own = np.full(B, fill is None)
+    fill_in = y_in if fill is None else np.asarray(fill, dtype=np.float64)
+    use_fill = fill is not None
+    diag = [int(idx[i, i]) for i in range(M)]
 
-    def kernel(
-        wo: FloatArray, po: FloatArray, u: FloatArray, to: FloatArray, yc: FloatArray,
-        okc: FloatArray, al: FloatArray, okb: BoolArray, fc: FloatArray, ownc: BoolArray
-    ) -> None:
-        tmp = np.empty(u.shape[1])
-        pi = []
+    def kernel(sc: list[FloatArray], wi: FloatArray, pin: FloatArray, u: FloatArray,
+               yc: FloatArray, mc: BoolArray, fc: FloatArray, wo: FloatArray, po: FloatArray,
+               to: FloatArray, al: FloatArray) -> None:
+        np.copyto(wo, wi)
+        np.copyto(po, pin)
+        d, yh, tmp, tr, k_i = sc[0], sc[1], sc[2], sc[3], sc[4]
+        pi = sc[5 : 5 + M]
         for i in range(M):  # π = P_{n−1} ỹ_n
-            acc = po[idx[i, 0]] * u[0]
+            np.multiply(po[idx[i, 0]], u[0], out=pi[i])
             for j in range(1, M):
                 np.multiply(po[idx[i, j]], u[j], out=tmp)
-                acc += tmp
-            pi.append(acc)
-        d = u[0] * pi[0]  # 1 + ỹᵀ π
-        yh = wo[0] * u[0]  # ŵ_{n−1}ᵀ ỹ_n
+                pi[i] += tmp
+        np.multiply(u[0], pi[0], out=d)  # ỹᵀπ
+        np.multiply(wo[0], u[0], out=yh)  # ŵ_{n−1}ᵀ ỹ_n
         for i in range(1, M):
             np.multiply(u[i], pi[i], out=tmp)
             d += tmp
             np.multiply(wo[i], u[i], out=tmp)
             yh += tmp
         d += 1.0
-        np.divide(okc, d, out=d)  # g = ok / (1 + ỹᵀπ): zero gain without observation
-        np.copyto(to[0], yh)
-        np.copyto(to[0], yc, where=okb)  # the observation, or the prediction if missing
-        np.subtract(to[0], yh, out=al)  # eq. (13), α = y − ŵᵀỹ (0 where missing)
-        np.copyto(to[0], fc, where=~(okb | ownc))
-        tr = np.zeros_like(d)
+        np.divide(1.0, d, out=d)  # 1 / (1 + ỹᵀπ)
+        np.copyto(d, 0.0, where=mc)  # zero gain without an observation
+        np.subtract(yc, yh, out=al)  # eq. (13), α = y − ŵᵀỹ
+        np.copyto(al, 0.0, where=mc)
+        tr[:] = 0.0
         for i in range(M):
-            np.multiply(pi[i], d, out=tmp)  # eq. (12), k_i = π_i / (1 + ỹᵀπ)
-            k_i = tmp.copy()
+            np.multiply(pi[i], d, out=k_i)  # eq. (12), k_i = π_i / (1 + ỹᵀπ)
             np.multiply(k_i, al, out=tmp)
             wo[i] += tmp  # eq. (14)
             for j in range(i, M):
                 np.multiply(k_i, pi[j], out=tmp)
                 po[idx[i, j]] -= tmp  # eq. (15) bracket: P − k ỹᵀ P = P − k πᵀ
-            tr += po[idx[i, i]]
-        # eq. (15): × λ⁻¹ where a measurement arrived and the trace stays within the bound
-        scale = np.where((tr * inv_lam <= trace_max) & okb, inv_lam, 1.0)
-        for row in po:
-            row *= scale
+            tr += po[diag[i]]
+        # eq. (15): × λ⁻¹ where an observation arrived and the trace stays within the bound
+        if lam != 1.0:
+            tr *= inv_lam
+            np.less_equal(tr, trace_max, out=tmp, casting="unsafe")
+            np.copyto(tmp, 0.0, where=mc)
+            tmp *= inv_lam - 1.0
+            tmp += 1.0
+            for row in po:
+                row *= tmp
         bad = ~np.isfinite(tr)
         for i in range(M):
-            bad |= po[idx[i, i]] <= 0.0
+            bad |= po[diag[i]] <= 0.0
         if bad.any():  # safety net: covariance reset to c I (see mvtrack.filters.rls)
             for i in range(M):
                 for j in range(i, M):
                     po[idx[i, j], bad] = c if i == j else 0.0
+        np.copyto(to[0], yc)  # the observation shifts into the delay line ...
+        np.copyto(to[0], fc if use_fill else yh, where=mc)  # ... or fill / the prediction
         for i in range(1, M):
             np.copyto(to[i], u[i - 1])
 
-    _chunked(kernel, [w_out, p_out, taps, taps_out, y_in, okf, alpha, ok, fill_in, own], B)
+    _chunked(kernel, [w, p, taps, y_in, miss, fill_in, w_out, p_out, taps_out, alpha], B, 5 + M)
     return w_out, p_out, taps_out, alpha
