@@ -71,11 +71,18 @@ def _chunked(fn: Callable[..., None], arrays: list[np.ndarray], B: int, n_scratc
     chunks (no allocation per chunk).
     """
     size = min(B, CHUNK)
-    buf = np.empty((n_scratch, size))
+    buf = np.empty((n_scratch, size), dtype=arrays[0].dtype)
     for s in range(0, B, CHUNK):
         e = min(s + CHUNK, B)
         scratch = [row[: e - s] for row in buf]
         fn(scratch, *[a[..., s:e] for a in arrays])
+
+
+def _finite(a: np.ndarray) -> BoolArray:
+    """``np.isfinite`` for float arrays; all true for object arrays (counting numbers)."""
+    if a.dtype == object:
+        return np.ones(a.shape, dtype=bool)
+    return np.isfinite(a)
 
 
 def _lincomb(terms: list[tuple[float, FloatArray]], out: FloatArray, tmp: FloatArray) -> None:
@@ -175,7 +182,7 @@ def kf_axis_update(
     idx = packed_index(n)
     x_out = np.empty_like(x)
     p_out = np.empty_like(p)
-    miss = ~(ok & np.isfinite(z))  # a missing measurement never enters the arithmetic
+    miss = ~(ok & _finite(z))  # a missing measurement never enters the arithmetic
 
     def kernel(sc: list[FloatArray], xi: FloatArray, pi: FloatArray, zc: FloatArray,
                mc: BoolArray, xo: FloatArray, po: FloatArray) -> None:
@@ -245,11 +252,11 @@ def rls_step(
     w_out = np.empty_like(w)
     p_out = np.empty_like(p)
     taps_out = np.empty_like(taps)
-    alpha = np.empty(B)
-    y_in = np.asarray(y, dtype=np.float64)
-    miss = ~(ok & np.isfinite(y_in))
+    alpha = np.empty(B, dtype=w.dtype)
+    y_in = np.asarray(y, dtype=w.dtype)
+    miss = ~(ok & _finite(y_in))
     inv_lam = 1.0 / lam
-    fill_in = y_in if fill is None else np.asarray(fill, dtype=np.float64)
+    fill_in = y_in if fill is None else np.asarray(fill, dtype=w.dtype)
     use_fill = fill is not None
     diag = [int(idx[i, i]) for i in range(M)]
 
@@ -277,7 +284,6 @@ def rls_step(
         np.copyto(d, 0.0, where=mc)  # zero gain without an observation
         np.subtract(yc, yh, out=al)  # eq. (13), α = y − ŵᵀỹ
         np.copyto(al, 0.0, where=mc)
-        tr[:] = 0.0
         for i in range(M):
             np.multiply(pi[i], d, out=k_i)  # eq. (12), k_i = π_i / (1 + ỹᵀπ)
             np.multiply(k_i, al, out=tmp)
@@ -285,6 +291,8 @@ def rls_step(
             for j in range(i, M):
                 np.multiply(k_i, pi[j], out=tmp)
                 po[idx[i, j]] -= tmp  # eq. (15) bracket: P − k ỹᵀ P = P − k πᵀ
+        np.copyto(tr, po[diag[0]])
+        for i in range(1, M):
             tr += po[diag[i]]
         # eq. (15): × λ⁻¹ where an observation arrived and the trace stays within the bound
         if lam != 1.0:
@@ -295,7 +303,7 @@ def rls_step(
             tmp += 1.0
             for row in po:
                 row *= tmp
-        bad = ~np.isfinite(tr)
+        bad = ~_finite(tr)
         for i in range(M):
             bad |= po[diag[i]] <= 0.0
         if bad.any():  # safety net: covariance reset to c I (see mvtrack.filters.rls)
