@@ -96,26 +96,30 @@ def test_x5_vehicles_are_drawn_inside_their_boxes() -> None:
 def test_x5_has_sensor_noise_of_sigma_3_and_one_pixel_jitter() -> None:
     sc = S.x5_intersection(0)
     bg = _luma(R.render_background(sc, 5)).astype(np.float64)
-    gray = np.array([[0.114, 0.587, 0.299]])
-    best = []
+    gray = np.array([0.114, 0.587, 0.299])
+    shifts = []
     for f, img in enumerate(islice(R.render_frames(sc, 5), 12)):
+        luma = _luma(img)
+        (sx, sy), _ = cv2.phaseCorrelate(bg, luma)  # picture moved by (sx, sy)
+        shifts.append((sx, sy))
+        assert abs(sx) <= 1.1 and abs(sy) <= 1.1
         mask = np.ones((240, 320), bool)
         for xy, wh in zip(sc.xy[sc.rows(f)], sc.wh[sc.rows(f)], strict=True):
             x0, y0 = np.floor(xy - wh / 2 - 3).astype(int)
             x1, y1 = np.ceil(xy + wh / 2 + 3).astype(int)
             mask[max(y0, 0) : y1, max(x0, 0) : x1] = False
-        m = mask[2:-2, 2:-2]
-        scores = {}
-        for dx in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                ref = bg[2 + dy : 238 + dy, 2 + dx : 318 + dx]
-                scores[dx, dy] = np.std((_luma(img)[2:-2, 2:-2] - ref)[m])
-        shift = min(scores, key=scores.get)
-        best.append(shift)
-        # Luma of independent σ = 3 noise per channel has σ = 3·|(0.114, 0.587, 0.299)|.
-        assert scores[shift] == pytest.approx(3 * np.linalg.norm(gray), rel=0.15)
-        assert sorted(scores.values())[1] > 1.5 * scores[shift]
-    assert len(set(best)) >= 3  # the camera does shake
+        warp = np.array([[1.0, 0.0, sx], [0.0, 1.0, sy]])
+        moved = cv2.warpAffine(bg, warp, (320, 240), flags=cv2.INTER_LINEAR)
+        m = mask[3:-3, 3:-3]
+        resid = (luma - moved)[3:-3, 3:-3][m]
+        still = (luma - bg)[3:-3, 3:-3][m]
+        # Luma of independent σ = 3 noise per channel has σ = 3·|(0.114, 0.587, 0.299)|; the
+        # re-interpolated background adds a little on top.
+        assert np.std(resid) == pytest.approx(3 * np.linalg.norm(gray), rel=0.25)
+        if max(abs(sx), abs(sy)) > 0.4:
+            assert np.std(still) > 1.3 * np.std(resid)  # the shift is real, not noise
+    shifts = np.array(shifts)
+    assert shifts.std(axis=0).min() > 0.2  # the camera does shake, differently each frame
 
 
 def test_x8_car_is_drawn_over_the_people() -> None:

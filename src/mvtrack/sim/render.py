@@ -2,12 +2,12 @@
 
 Each scene gets a background drawn once (flat grey for X4 as SPEC X4 prescribes; asphalt
 roads with lane markings, stop lines and bright roadside poles on textured ground for X5;
-paving with the white car for X8; asphalt for the others). Per frame the renderer crops the
-background at the frame's camera jitter, draws only that frame's objects with OpenCV
-(vehicles as two-tone rotated bodies with a shaded side, people as blobs with head, torso and
-legs, points as dots, crowd targets as boxes), redraws occluders over them, and adds sensor
-noise from a pre-drawn bank (random bank frame and offset per frame), so a 320×240 frame costs
-well under a millisecond.
+paving with the white car for X8; asphalt for the others). Per frame the renderer takes the
+background shifted by the frame's camera jitter (a sub-pixel translation), draws only that
+frame's objects with OpenCV (vehicles as two-tone rotated bodies with a shaded side, people as
+blobs with head, torso and legs, points as dots, crowd targets as boxes), redraws occluders
+over them, and adds sensor noise from a pre-drawn bank (random bank frame and offset per
+frame), so a 320×240 frame costs about a millisecond.
 
 Ground truth is in scene coordinates; camera jitter moves the picture, not the truth.
 """
@@ -47,15 +47,17 @@ class RenderStyle:
         Amplitude (grey levels) of the background texture; 0 for a flat colour.
     noise_sigma : float
         Standard deviation of the per-frame sensor noise, grey levels (0: none).
-    jitter : int
-        Camera jitter: each frame is shifted by an integer in ``[-jitter, jitter]`` per axis.
+    jitter : float
+        Camera jitter: each frame's picture is translated by an independent uniform shift in
+        ``[-jitter, jitter]`` px per axis (bilinear, sub-pixel: a shaking camera does not move
+        in whole pixels).
     """
 
     background: str = "asphalt"
     ground: tuple[int, int, int] = (88, 88, 88)
     texture: float = 6.0
     noise_sigma: float = 2.0
-    jitter: int = 0
+    jitter: float = 0.0
 
     def __post_init__(self) -> None:
         if self.background not in ("flat", "intersection", "plaza", "asphalt"):
@@ -69,9 +71,9 @@ def default_style(scene: Scene) -> RenderStyle:
     noise and ±1 px jitter (SPEC X5); X8 on paving with σ = 2; others asphalt."""
     if scene.name == "x4":
         grey = tuple(int(c) for c in scene.meta.get("background", (96, 96, 96)))
-        return RenderStyle("flat", grey, 0.0, 0.0, 0)  # type: ignore[arg-type]
+        return RenderStyle("flat", grey, 0.0, 0.0, 0.0)  # type: ignore[arg-type]
     if scene.name == "x5":
-        return RenderStyle("intersection", (88, 88, 88), 6.0, 3.0, 1)
+        return RenderStyle("intersection", (88, 88, 88), 6.0, 3.0, 1.0)
     if scene.name == "x8":
         return RenderStyle("plaza", (112, 118, 122), 5.0, 2.0, 0)
     if scene.name == "crowd":
@@ -185,14 +187,16 @@ def _draw_vehicle(img: Frame, xy: NDArray[np.float64], hd: NDArray[np.float64],
                   col2: NDArray[np.uint8]) -> None:
     """Two-tone bodies: body, a shaded right side, and a cabin (windows) of the second tone."""
     inner = np.maximum(lw - 1.0, 1.0)  # pixel centres: a body L px long covers L pixels
-    body = _corners(xy, hd, -0.5, 0.5, -0.5, 0.5, inner)
-    side = _corners(xy, hd, -0.5, 0.5, 0.3, 0.5, inner)
-    cabin = _corners(xy, hd, -0.3, 0.15, -0.32, 0.32, inner)
-    shade = (col.astype(np.float64) * 0.85).astype(np.uint8)
+    polys = np.stack([
+        _corners(xy, hd, -0.5, 0.5, -0.5, 0.5, inner),  # body
+        _corners(xy, hd, -0.5, 0.5, 0.3, 0.5, inner),  # shaded right side
+        _corners(xy, hd, -0.3, 0.15, -0.32, 0.32, inner),  # cabin
+    ], axis=1)
+    ipolys = np.round(polys * _ONE).astype(np.int32)
+    tones = np.stack([col, (col.astype(np.float64) * 0.85).astype(np.uint8), col2], 1).tolist()
     for i in range(xy.shape[0]):  # the few vehicles of one frame
-        _poly(img, body[i], tuple(int(v) for v in col[i]))
-        _poly(img, side[i], tuple(int(v) for v in shade[i]))
-        _poly(img, cabin[i], tuple(int(v) for v in col2[i]))
+        for j in range(3):
+            cv2.fillConvexPoly(img, ipolys[i, j], tones[i][j], cv2.LINE_8, _SHIFT)
 
 
 def _draw_block(img: Frame, xy: NDArray[np.float64], wh: NDArray[np.float64],
@@ -238,10 +242,10 @@ def _draw_point(img: Frame, xy: NDArray[np.float64], wh: NDArray[np.float64],
 
 # ---------------------------------------------------------------------- frames
 def _noise_bank(rng: np.random.Generator, size: tuple[int, int], sigma: float,
-                pad: int) -> tuple[list[Frame], list[Frame]]:
+                pad: int, n_frames: int) -> tuple[list[Frame], list[Frame]]:
     """Positive and negative parts of a few pre-drawn Gaussian noise frames."""
     w, h = size[0] + pad, size[1] + pad
-    count = int(np.clip(24e6 // (w * h * 3 * 4), 2, 12))
+    count = int(np.clip(24e6 // (w * h * 3 * 4), 2, min(12, n_frames)))
     pos, neg = [], []
     for _ in range(count):
         n = np.round(sigma * rng.standard_normal((h, w, 3), dtype=np.float32))
@@ -274,14 +278,21 @@ def render_frames(
         raise ValueError(f"size must be at least 8×8 px, got {(out_w, out_h)}")
     style = default_style(scene) if style is None else style
     rng = np.random.default_rng(seed)
-    m = int(style.jitter)
+    jit = float(style.jitter)
+    m = int(np.ceil(jit)) + 1 if jit > 0 else 0  # margin for the shift and interpolation
     bg = _background(scene, style, (out_w, out_h), m, rng)
     scale = np.array([out_w / scene.size[0], out_h / scene.size[1]])
     n_frames = scene.n_frames
-    shifts = rng.integers(-m, m + 1, (n_frames, 2)) if m else np.zeros((n_frames, 2), np.int64)
+    shifts = rng.uniform(-jit, jit, (n_frames, 2)) if m else np.zeros((n_frames, 2))
+    # Shifts on a 1/4 px grid, so each distinct shifted background is interpolated once and
+    # cached (a bilinear warp per frame would cost more than the rest of the frame).
+    q = 0.25
+    shifts = q * np.round(shifts / q)
+    cache: dict[tuple[float, float], Frame] = {}
+    keep = out_w * out_h * 3 * (2 * np.ceil(jit / q) + 1) ** 2 <= 128e6
     pad = 16
     if style.noise_sigma > 0:
-        pos, neg = _noise_bank(rng, (out_w, out_h), style.noise_sigma, pad)
+        pos, neg = _noise_bank(rng, (out_w, out_h), style.noise_sigma, pad, n_frames)
         pick = rng.integers(0, len(pos), n_frames)
         offs = rng.integers(0, pad + 1, (n_frames, 2))
     codes = np.array([_KIND_CODE[k] for k in scene.kind], np.int64)
@@ -289,10 +300,19 @@ def render_frames(
     for occ in scene.meta.get("occluders", []):
         lo = (np.asarray(occ["xy"], float) - np.asarray(occ["wh"], float) / 2) * scale
         hi = (np.asarray(occ["xy"], float) + np.asarray(occ["wh"], float) / 2) * scale
-        occ_boxes.append((np.floor(lo).astype(int), np.ceil(hi).astype(int) + 1))
+        occ_boxes.append((np.floor(lo).astype(int) - 1, np.ceil(hi).astype(int) + 1))
     for f in range(n_frames):
-        dx, dy = int(shifts[f, 0]), int(shifts[f, 1])
-        crop = bg[m + dy : m + dy + out_h, m + dx : m + dx + out_w]
+        dx, dy = float(shifts[f, 0]), float(shifts[f, 1])
+        if m:
+            crop = cache.get((dx, dy))  # type: ignore[assignment]
+            if crop is None:
+                warp = np.array([[1.0, 0.0, m + dx], [0.0, 1.0, m + dy]])
+                crop = cv2.warpAffine(bg, warp, (out_w, out_h),
+                                      flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+                if keep:
+                    cache[dx, dy] = crop
+        else:
+            crop = bg
         img = crop.copy()
         rows = scene.rows(f)
         if rows.stop > rows.start:
@@ -314,8 +334,8 @@ def render_frames(
                 else:
                     _draw_point(img, xy[sel], wh[sel], scene.color[oid])
             for lo, hi in occ_boxes:  # occluders in front of everything (X8's white car)
-                x0, y0 = max(lo[0] - dx, 0), max(lo[1] - dy, 0)
-                x1, y1 = min(hi[0] - dx, out_w), min(hi[1] - dy, out_h)
+                x0, y0 = max(lo[0] - round(dx), 0), max(lo[1] - round(dy), 0)
+                x1, y1 = min(hi[0] - round(dx), out_w), min(hi[1] - round(dy), out_h)
                 if x1 > x0 and y1 > y0:
                     img[y0:y1, x0:x1] = crop[y0:y1, x0:x1]
         if style.noise_sigma > 0:
@@ -334,7 +354,7 @@ def render_background(
     style = default_style(scene) if style is None else style
     empty = replace(style, noise_sigma=0.0)
     out_w, out_h = scene.size if size is None else (int(size[0]), int(size[1]))
-    m = int(style.jitter)
+    m = int(np.ceil(style.jitter)) + 1 if style.jitter > 0 else 0
     bg = _background(scene, empty, (out_w, out_h), m, np.random.default_rng(seed))
     return bg[m : m + out_h, m : m + out_w].copy()
 
