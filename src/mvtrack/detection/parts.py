@@ -67,7 +67,7 @@ def bgr_to_hsi(frame: NDArray[np.uint8]) -> tuple[FloatArray, FloatArray, FloatA
     frame = np.asarray(frame)
     if frame.ndim != 3 or frame.shape[-1] != 3:
         raise ValueError(f"frame must be an (H, W, 3) BGR image, got shape {frame.shape}")
-    b, g, r = (frame[..., c].astype(np.float64) for c in range(3))
+    b, g, r = (frame[..., c].astype(np.float32) for c in range(3))
     inten = (r + g + b) / 3.0
     mn = np.minimum(np.minimum(r, g), b)
     sat = np.where(inten > 0, 1.0 - mn / np.maximum(inten, 1e-12), 0.0)
@@ -75,7 +75,7 @@ def bgr_to_hsi(frame: NDArray[np.uint8]) -> tuple[FloatArray, FloatArray, FloatA
     den = np.sqrt((r - g) ** 2 + (r - b) * (g - b))
     theta = np.degrees(np.arccos(np.clip(num / np.maximum(den, 1e-12), -1.0, 1.0)))
     hue = np.where(b <= g, theta, 360.0 - theta) % 360.0
-    return hue, sat, inten
+    return hue.astype(np.float64), sat.astype(np.float64), inten.astype(np.float64)
 
 
 def _hue_diff(a: FloatArray, b: FloatArray) -> FloatArray:
@@ -89,11 +89,43 @@ def _circ_mean(hue_deg: FloatArray, weights: FloatArray | None = None) -> float:
     return float(np.degrees(np.arctan2((w * np.sin(rad)).sum(), (w * np.cos(rad)).sum())) % 360)
 
 
-def circular_kmeans2(hue_deg: FloatArray, iters: int = 20) -> tuple[FloatArray, BoolArray]:
-    """K-means with K = 2 on hue angles (degrees), vectorised over pixels.
+_BINS = 360
+_MIDS = (np.arange(_BINS) + 0.5) * (360.0 / _BINS)
+_SIN, _COS = np.sin(np.radians(_MIDS)), np.cos(np.radians(_MIDS))
 
-    Initialised at the mode of a 10° histogram and the bin that maximises count × circular
-    distance to it; then alternates nearest-centre assignment and circular means.
+
+def _hist_mean(counts: FloatArray) -> float:
+    return float(np.degrees(np.arctan2(counts @ _SIN, counts @ _COS)) % 360.0)
+
+
+def _kmeans2_hist(counts: FloatArray, iters: int = 20) -> tuple[FloatArray, BoolArray]:
+    """2-means on a 360-bin hue histogram: centres (2,) and, per bin, whether it is in the
+    second cluster. Each iteration costs O(360)."""
+    coarse = counts.reshape(36, -1).sum(axis=1)
+    cmids = np.arange(36) * 10.0 + 5.0
+    c0 = cmids[np.argmax(coarse)]
+    c1 = cmids[np.argmax(coarse * _hue_diff(cmids, c0))]
+    centres = np.array([c0, c1])
+    second = np.zeros(_BINS, dtype=bool)
+    for it in range(iters):
+        new = _hue_diff(_MIDS, centres[1]) < _hue_diff(_MIDS, centres[0])
+        for k, sel in enumerate((~new, new)):
+            w = np.where(sel, counts, 0.0)
+            if w.sum() > 0:
+                centres[k] = _hist_mean(w)
+        if it and np.array_equal(new, second):
+            break
+        second = new
+    return centres, second
+
+
+def circular_kmeans2(hue_deg: FloatArray, iters: int = 20) -> tuple[FloatArray, BoolArray]:
+    """K-means with K = 2 on hue angles (degrees), run on a 1° hue histogram.
+
+    Pixels are quantised to 1° (far below the 20° stop rule), so each iteration costs O(360)
+    whatever the number of pixels: k-means on the weighted bin centres, with circular distance
+    and circular means. Initialised at the mode of a 10° histogram and the 10° bin that
+    maximises count × circular distance to it.
 
     Returns
     -------
@@ -105,23 +137,9 @@ def circular_kmeans2(hue_deg: FloatArray, iters: int = 20) -> tuple[FloatArray, 
     h = np.asarray(hue_deg, dtype=float) % 360.0
     if h.size < 2:
         raise ValueError("circular_kmeans2 needs at least 2 hue values")
-    counts = np.bincount((h // 10).astype(int) % 36, minlength=36).astype(float)
-    mids = np.arange(36) * 10.0 + 5.0
-    c0 = mids[np.argmax(counts)]
-    c1 = mids[np.argmax(counts * _hue_diff(mids, c0))]
-    centres = np.array([c0, c1])
-    second = np.zeros(h.size, dtype=bool)
-    rad = np.radians(h)
-    sin, cos = np.sin(rad), np.cos(rad)
-    for _ in range(iters):
-        new = _hue_diff(h, centres[1]) < _hue_diff(h, centres[0])
-        for k, sel in enumerate((~new, new)):
-            if sel.any():
-                centres[k] = np.degrees(np.arctan2(sin[sel].sum(), cos[sel].sum())) % 360.0
-        if np.array_equal(new, second):
-            break
-        second = new
-    return centres, second
+    b = h.astype(np.intp) % _BINS
+    centres, second = _kmeans2_hist(np.bincount(b, minlength=_BINS).astype(float), iters)
+    return centres, second[b]
 
 
 # --------------------------------------------------------------------------- moving region
@@ -229,45 +247,70 @@ def segment_parts(
     idx = np.flatnonzero(chroma)
     if idx.size < p.min_part_px:
         return labels, np.zeros(0)
-    h = hue.ravel()[idx]
-    leaves: list[tuple[IntArray, float]] = []
-    stack: list[tuple[IntArray, int]] = [(np.arange(idx.size), 0)]
-    while stack:  # the binary decision tree: a handful of nodes, each vectorised over pixels
+    # the tree splits by hue only, so it partitions the hue circle: run it on the 1° histogram
+    # of the region (a handful of nodes, O(360) each) and label pixels through their hue bin
+    pix_bin = hue.ravel()[idx].astype(np.intp) % _BINS
+    counts = np.bincount(pix_bin, minlength=_BINS).astype(float)
+    leaves: list[tuple[BoolArray, float]] = []
+    stack: list[tuple[BoolArray, int]] = [(counts > 0, 0)]
+    while stack:
         node, depth = stack.pop()
-        if node.size < p.min_node_px or depth >= p.max_depth:
-            leaves.append((node, _circ_mean(h[node])))
+        c = np.where(node, counts, 0.0)
+        occupied = np.flatnonzero(c)
+        # all hues within a 20° arc: any two centres are < 20° apart, so it is a leaf
+        # circular span of the occupied bins = 360° − the widest empty gap
+        gaps = np.diff(occupied, append=occupied[0] + _BINS) if occupied.size else [_BINS]
+        narrow = (_BINS - np.max(gaps) + 1) * (360.0 / _BINS) < p.min_hue_sep
+        if c.sum() < p.min_node_px or depth >= p.max_depth or narrow:
+            leaves.append((node, 0.0))
             continue
-        centres, second = circular_kmeans2(h[node])
-        if _hue_diff(centres[0], centres[1]) < p.min_hue_sep or second.all() or not second.any():
-            leaves.append((node, _circ_mean(h[node])))
+        centres, second = _kmeans2_hist(c)
+        second &= node
+        first = node & ~second
+        if _hue_diff(centres[0], centres[1]) < p.min_hue_sep or not (
+            counts[second].sum() and counts[first].sum()
+        ):
+            leaves.append((node, 0.0))
             continue
-        stack.append((node[~second], depth + 1))
-        stack.append((node[second], depth + 1))
+        stack.append((first, depth + 1))
+        stack.append((second, depth + 1))
     # refinement: keep connected pieces of each leaf that are large enough
     # "2 % of the region": of the region's chromatic pixels, the ones that are segmented
     min_px = max(p.min_part_px, p.min_part_frac * idx.size)
     flat = labels.ravel()
-    hues = []
+    n_found = 0
     leaf_img = np.zeros(mask.shape, dtype=np.uint8)
-    for node, centre in leaves:
+    for node, _ in leaves:  # a few leaves; each a C call over the crop
         leaf_img[:] = 0
-        leaf_img.ravel()[idx[node]] = 1
+        leaf_img.ravel()[idx[node[pix_bin]]] = 1
         _, comp, stats, _ = cv2.connectedComponentsWithStats(leaf_img, connectivity=8)
-        keep = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= min_px) + 1
-        if keep.size == 0:
+        big = stats[:, cv2.CC_STAT_AREA] >= min_px
+        big[0] = False  # component 0 is the background of leaf_img
+        if not big.any():
             continue
-        hues.append(centre)
-        flat[np.isin(comp.ravel(), keep)] = len(hues)
-    if not hues:
+        n_found += 1
+        flat[big[comp.ravel()]] = n_found
+    if not n_found:
         return labels, np.zeros(0)
-    # order parts top to bottom
-    rows = np.arange(mask.shape[0], dtype=float)[:, None] * np.ones(mask.shape[1])
-    cnt = np.bincount(flat, minlength=len(hues) + 1)[1:]
-    ymean = np.bincount(flat, weights=rows.ravel(), minlength=len(hues) + 1)[1:] / cnt
+    # hue of each part: circular mean of its pixels; order parts top to bottom
+    pix = np.flatnonzero(flat)
+    lab = flat[pix]
+    rad = np.radians(hue.ravel()[pix])
+    hues = (
+        np.degrees(
+            np.arctan2(
+                np.bincount(lab, np.sin(rad), n_found + 1),
+                np.bincount(lab, np.cos(rad), n_found + 1),
+            )
+        )[1:]
+        % 360.0
+    )
+    cnt = np.bincount(lab, minlength=n_found + 1)[1:]
+    ymean = np.bincount(lab, weights=pix // mask.shape[1], minlength=n_found + 1)[1:] / cnt
     order = np.argsort(ymean, kind="stable")
-    remap = np.zeros(len(hues) + 1, dtype=np.int32)
-    remap[order + 1] = np.arange(1, len(hues) + 1)
-    return remap[labels], np.asarray(hues)[order]
+    remap = np.zeros(n_found + 1, dtype=np.int32)
+    remap[order + 1] = np.arange(1, n_found + 1)
+    return remap[labels], hues[order]
 
 
 def adjacency(labels: NDArray[np.int32], min_shared: int = 3, gap: int = 2) -> IntArray:
@@ -359,30 +402,39 @@ def region_features(
     Regions with no pixel get area 0 and NaN elsewhere. The box of a region is that of its
     pixels; its centre for :attr:`PartFeatures.boxes` is the pixel centroid.
     """
-    lab = np.asarray(labels).ravel().astype(np.intp)
-    if lab.size != hue.size:
-        raise ValueError(f"labels and hue differ in size: {lab.size} vs {hue.size}")
+    lab2 = np.asarray(labels)
+    if lab2.size != hue.size:
+        raise ValueError(f"labels and hue differ in size: {lab2.size} vs {hue.size}")
     L = n_labels + 1
-    lab = np.where((lab >= 0) & (lab < L), lab, 0)
-    W = np.asarray(labels).shape[1]
-    vv, uu = np.divmod(np.arange(lab.size), W)
+    pix = np.flatnonzero((lab2.ravel() > 0) & (lab2.ravel() < L))  # labelled pixels only
+    lab = lab2.ravel()[pix].astype(np.intp)
+    vv, uu = np.divmod(pix, lab2.shape[1])
+    inten_p = inten.ravel()[pix]
     area = np.bincount(lab, minlength=L).astype(float)
     with np.errstate(invalid="ignore", divide="ignore"):
         cx = np.bincount(lab, weights=uu, minlength=L) / area + 0.5
         cy = np.bincount(lab, weights=vv, minlength=L) / area + 0.5
-        s1 = np.bincount(lab, weights=inten.ravel(), minlength=L)
-        s2 = np.bincount(lab, weights=inten.ravel() ** 2, minlength=L)
+        s1 = np.bincount(lab, weights=inten_p, minlength=L)
+        s2 = np.bincount(lab, weights=inten_p**2, minlength=L)
         sig = np.sqrt(np.maximum(s2 / area - (s1 / area) ** 2, 0.0))
-    chroma = (sat.ravel() >= min_saturation).astype(float)
-    rad = np.radians(hue.ravel())
+    chroma = (sat.ravel()[pix] >= min_saturation).astype(float)
+    rad = np.radians(hue.ravel()[pix])
     hs = np.bincount(lab, weights=chroma * np.sin(rad), minlength=L)
     hc = np.bincount(lab, weights=chroma * np.cos(rad), minlength=L)
     nchroma = np.bincount(lab, weights=chroma, minlength=L)
     hbar = np.where(nchroma > 0, np.degrees(np.arctan2(hs, hc)) % 360.0, np.nan)
+    # bounding boxes: extreme pixel coordinates per label
     wh = np.full((L, 2), np.nan)
-    for k, sl in enumerate(ndimage.find_objects(np.asarray(labels), max_label=n_labels), 1):
-        if sl is not None:
-            wh[k] = (sl[1].stop - sl[1].start, sl[0].stop - sl[0].start)
+    if pix.size:
+        big = np.iinfo(np.int64).max
+        x0, y0 = np.full(L, big), np.full(L, big)
+        x1, y1 = np.full(L, -1), np.full(L, -1)
+        np.minimum.at(x0, lab, uu)
+        np.minimum.at(y0, lab, vv)
+        np.maximum.at(x1, lab, uu)
+        np.maximum.at(y1, lab, vv)
+        seen = area > 0
+        wh[seen] = np.stack([x1 - x0 + 1, y1 - y0 + 1], axis=1)[seen]
     return PartFeatures(
         area=area[1:],
         centroid=np.stack([cx, cy], axis=1)[1:],
