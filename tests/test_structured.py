@@ -7,6 +7,7 @@ import pytest
 from filterpy.kalman import KalmanFilter
 
 from mvtrack._batch import concat, take
+from mvtrack.filters import kalman
 from mvtrack.filters.base import Predictor
 from mvtrack.filters.structured import (
     PartGraph,
@@ -304,3 +305,20 @@ def test_occlusion_scaled_relation_noise_keeps_the_learned_offset() -> None:
     move_c = np.abs(out["constant", 0.9].xr[0, 0, 0])
     move_o = np.abs(out["occlusion", 0.9].xr[0, 0, 0])
     assert 0 < move_o < 0.5 * move_c
+
+
+def test_alpha_zero_equals_the_batched_kalman_functions() -> None:
+    rng = np.random.default_rng(11)
+    params = SKFParams()
+    graph = PartGraph.chain(3)
+    N, K, T = 5, 3, 25
+    z = np.cumsum(rng.normal(0, 2, (T, N, K, 2)), axis=0) + 100
+    state = init(params, graph, z[0])
+    x, P = state.xc.reshape(N * K, -1).copy(), state.Pc.reshape(N * K, 6, 6).copy()
+    for k in range(1, T):
+        state = predict(params, state)
+        x, P = kalman.predict(x, P, params.F, params.Q)
+        state, _ = update(params, graph, state, z[k], np.zeros((N, K)))
+        x, P = kalman.update(x, P, z[k].reshape(N * K, 2), params.H, params.R_cell)
+    np.testing.assert_allclose(state.xc.reshape(N * K, -1), x, atol=1e-9)
+    np.testing.assert_allclose(state.Pc.reshape(N * K, 6, 6), P, atol=1e-9)

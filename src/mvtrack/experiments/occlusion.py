@@ -31,12 +31,11 @@ from mvtrack.detection.parts import (
     segment_parts,
 )
 from mvtrack.experiments.report import Report
+from mvtrack.filters import kalman
 from mvtrack.filters.structured import (
     PartGraph,
     SKFParams,
     init,
-    kf_predict,
-    kf_update,
     predict,
     search_region,
     update,
@@ -127,7 +126,9 @@ def run_skf(meas: PartMeasurements, params: SKFParams | None = None) -> SKFRun:
 
 
 def run_independent(meas: PartMeasurements, params: SKFParams | None = None) -> FloatArray:
-    """Baseline: independent CA KFs per part on the visible centroid, coasting when missing.
+    """Baseline: independent KFs per part on the visible centroid, coasting when missing.
+
+    Uses the plain batched filter of :mod:`mvtrack.filters.kalman` with the SKF's model.
 
     Returns the prior positions (T, K, 2).
     """
@@ -139,9 +140,9 @@ def run_independent(meas: PartMeasurements, params: SKFParams | None = None) -> 
     prior = np.full((T, K, 2), np.nan)
     prior[0] = meas.z[0]
     for t in range(1, T):
-        x, P = kf_predict(x, P, params.F, params.Q)
+        x, P = kalman.predict(x, P, params.F, params.Q)
         prior[t] = x[:, :2]
-        x, P = kf_update(x, P, meas.z[t], params.H, params.R_cell)
+        x, P = kalman.update(x, P, meas.z[t], params.H, params.R_cell)  # NaN rows coast
     return prior
 
 
