@@ -49,6 +49,14 @@ def test_video_switch_overrides_the_default(tmp_path) -> None:
     assert np.isin(gt.cls, [1, 3, 5]).all()
 
 
+def test_out_that_is_a_file_is_refused(tmp_path, capsys) -> None:
+    target = tmp_path / "file"
+    target.write_text("x")
+    assert main(["simulate", "x4", "--out", str(target)]) == 2
+    assert "not a folder" in capsys.readouterr().err
+    assert target.read_text() == "x"
+
+
 @pytest.mark.parametrize(
     ("args", "needle"),
     [

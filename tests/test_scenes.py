@@ -110,6 +110,15 @@ def test_x5_category_counts_and_directions(x5: S.Scene) -> None:
     assert (x5.size, x5.fps, x5.n_frames) == ((320, 240), 30.0, 360)
 
 
+def test_x5_straight_vehicles_keep_to_the_right_hand_lane(x5: S.Scene) -> None:
+    # eastbound y = 135, southbound x = 145, westbound y = 105, northbound x = 175
+    lane = {0: (1, 135.0), 1: (0, 145.0), 2: (1, 105.0), 3: (0, 175.0)}
+    for i in np.concatenate([x5.ids_of("straight"), x5.ids_of("waiting")]):
+        axis, value = lane[int(x5.meta["approach"][i - 1])]
+        _, xy = x5.trajectory(int(i))
+        np.testing.assert_allclose(xy[:, axis], value, atol=1e-9)
+
+
 def test_x5_waiting_vehicles_stand_still_from_60_to_300(x5: S.Scene) -> None:
     for i in x5.ids_of("waiting"):
         f, xy = x5.trajectory(int(i))
