@@ -50,13 +50,13 @@ def test_greedy_and_optimal_hand_case() -> None:
     assert n.det.tolist() == [0, 0]
 
 
-def test_optimal_maximises_matches_before_cost_unless_unmatched_cost_given() -> None:
-    # t0-d0 0; t0-d1 9; t1-d0 9; t1-d1 forbidden
-    c = np.array([[0.0, 9.0], [9.0, np.inf]])
-    a = assign(*_pairs(c), 2, 2, "optimal")
-    assert len(a) == 2  # both matched, total 18
+def test_optimal_trades_matches_against_cost_with_unmatched_cost() -> None:
+    # t0-d0 0; t0-d1 8; t1-d0 8; t1-d1 forbidden
+    c = np.array([[0.0, 8.0], [8.0, np.inf]])
+    a = assign(*_pairs(c), 2, 2, "optimal")  # default u = 16: 16 < 0 + 16 + ε, two matches
+    assert len(a) == 2
     b = assign(*_pairs(c), 2, 2, "optimal", unmatched_cost=10.0)
-    assert len(b) == 1 and b.track.tolist() == [0] and b.det.tolist() == [0]  # 0 + 2·10 < 18 + 0
+    assert len(b) == 1 and b.track.tolist() == [0] and b.det.tolist() == [0]  # 0 + 10 < 16
     # a pair is worth matching only when its cost is below u
     b = assign(*_pairs(np.array([[5.0]])), 1, 1, "optimal", unmatched_cost=4.0)
     assert len(b) == 0 and b.unmatched_tracks.tolist() == [0]
@@ -73,20 +73,16 @@ def _greedy_reference(c: np.ndarray) -> set[tuple[int, int]]:
     return out
 
 
-def _brute_force(c: np.ndarray, u: float | None) -> float:
-    """Best objective over all exclusive matchings: (−#matches, cost) or cost + u·unmatched/2."""
+def _brute_force(c: np.ndarray, u: float) -> float:
+    """Least cost + u/2 per unmatched track and detection over all exclusive matchings."""
     n, m = c.shape
-    best: tuple[float, float] | float | None = None
+    best = np.inf
     for k in range(min(n, m) + 1):
         for rows in itertools.combinations(range(n), k):
             for cols in itertools.permutations(range(m), k):
                 s = sum(c[r, q] for r, q in zip(rows, cols, strict=True))
-                if not np.isfinite(s):
-                    continue
-                val = (-k, s) if u is None else s + u * (n + m - 2 * k) / 2
-                if best is None or val < best:
-                    best = val
-    return best  # type: ignore[return-value]
+                best = min(best, s + u * (n + m - 2 * k) / 2)
+    return float(best)
 
 
 def _random_gated(rng: np.random.Generator, n: int, m: int, density: float) -> np.ndarray:
@@ -101,32 +97,34 @@ def test_optimal_equals_brute_force(solver: str) -> None:
     for _ in range(60):
         n, m = rng.integers(1, 5, 2)
         c = _random_gated(rng, n, m, rng.uniform(0.3, 1.0))
-        for u in (None, 7.0):
+        for u in (None, 7.0, 30.0):
             a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u, solver=solver)
-            got = (
-                (-len(a), a.cost.sum())
-                if u is None
-                else a.cost.sum() + u * (n + m - 2 * len(a)) / 2
-            )
-            ref = _brute_force(c, u)
-            np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-12)
+            if u is None:  # the default: twice the largest gated cost
+                u = 2 * np.abs(c[np.isfinite(c)]).max() if np.isfinite(c).any() else 0.0
+            got = a.cost.sum() + u * (n + m - 2 * len(a)) / 2
+            np.testing.assert_allclose(got, _brute_force(c, u), rtol=1e-8, atol=1e-8)
 
 
 @pytest.mark.parametrize("solver", ["dense", "sparse", "auto"])
 def test_optimal_equals_dense_lsa_on_many_clusters(solver: str) -> None:
-    """Block-sparse problem with many clusters: same total cost as one dense LSA."""
+    """Many clusters: same matching size and total cost as one dense LSA with u/2 dummies."""
     rng = np.random.default_rng(12)
     n = m = 200
     pos_t = rng.uniform(0, 400, (n, 2))
     pos_d = pos_t + rng.normal(0, 3, (m, 2))
     d2 = ((pos_t[:, None] - pos_d[None]) ** 2).sum(-1)
     c = np.where(d2 <= 100.0, d2, np.inf)
-    a = assign(*_pairs(c), n, m, "optimal", solver=solver)
-    big = 1e6
-    r, k = linear_sum_assignment(np.where(np.isfinite(c), c, big))
-    real = np.isfinite(c[r, k])
-    assert len(a) == real.sum()
-    assert a.cost.sum() == pytest.approx(c[r, k][real].sum(), rel=1e-12)
+    u = 100.0
+    a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u, solver=solver)
+    aug = np.full((n + m, m + n), np.inf)
+    aug[:n, :m] = c
+    aug[np.arange(n), m + np.arange(n)] = u / 2
+    aug[n + np.arange(m), np.arange(m)] = u / 2
+    aug[n:, m:] = 0.0
+    r, k = linear_sum_assignment(aug)
+    real = (r < n) & (k < m)
+    assert len(a) == real.sum() > 150
+    assert a.cost.sum() == pytest.approx(c[r[real], k[real]].sum(), rel=1e-9)
     assert len(set(a.det.tolist())) == len(a)  # exclusive
 
 

@@ -26,9 +26,9 @@ def _scene(seed: int, n: int = 300, m: int = 320) -> tuple[TrackView, Detections
 
 
 @pytest.mark.parametrize("name", list(DISTANCES))
-def test_kdtree_pairs_equal_dense_pairs(name: str) -> None:
+def test_grid_pairs_equal_dense_pairs(name: str) -> None:
     view, dets = _scene(7)
-    ti, dj, c = candidate_pairs(view, dets, name, method="kdtree")
+    ti, dj, c = candidate_pairs(view, dets, name, method="grid")
     td, dd, cd = candidate_pairs(view, dets, name, method="dense")
     assert ti.size > 100
     np.testing.assert_array_equal(ti, td)
@@ -39,7 +39,7 @@ def test_kdtree_pairs_equal_dense_pairs(name: str) -> None:
 def test_pairs_match_the_gate_on_the_dense_matrix() -> None:
     view, dets = _scene(8)
     for gate in (25.0, 400.0, 2500.0):
-        ti, dj, c = candidate_pairs(view, dets, "euclidean", gate, method="kdtree")
+        ti, dj, c = candidate_pairs(view, dets, "euclidean", gate, method="grid")
         d = distance_matrix("euclidean", view, dets)
         expected = np.argwhere(d <= gate)
         np.testing.assert_array_equal(np.stack([ti, dj], axis=1), expected)
@@ -60,7 +60,7 @@ def test_gate_is_inclusive_and_params_are_passed() -> None:
 
 def test_empty_inputs() -> None:
     view, dets = _scene(9, 10, 10)
-    for method in ("dense", "kdtree"):
+    for method in ("dense", "grid"):
         ti, dj, c = candidate_pairs(view, np.zeros((0, 2)), "euclidean", method=method)
         assert ti.size == dj.size == c.size == 0
         empty = TrackView.from_arrays(np.zeros((0, 2)))
@@ -72,4 +72,18 @@ def test_empty_inputs() -> None:
 def test_unknown_method_raises() -> None:
     view, dets = _scene(9, 3, 3)
     with pytest.raises(ValueError, match="unknown method"):
-        candidate_pairs(view, dets, "euclidean", method="grid")  # type: ignore[arg-type]
+        candidate_pairs(view, dets, "euclidean", method="octree")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="NaN"):
+        candidate_pairs(view, np.array([[np.nan, 1.0]]), "euclidean")
+
+
+def test_grid_handles_far_tracks_negative_coordinates_and_tiny_gates() -> None:
+    rng = np.random.default_rng(10)
+    xy = np.vstack([rng.uniform(-5000, 5000, (200, 2)), [[1e6, -1e6]]])
+    view = TrackView.from_arrays(xy, cov=2.0)
+    z = np.vstack([xy[:150] + rng.normal(0, 1, (150, 2)), rng.uniform(-6000, 6000, (50, 2))])
+    for gate in (1e-6, 1.0, 9.21, 1e4):
+        got = candidate_pairs(view, z, "mahalanobis", gate, method="grid")
+        ref = candidate_pairs(view, z, "mahalanobis", gate, method="dense")
+        for a, b in zip(got, ref, strict=True):
+            np.testing.assert_array_equal(a, b)

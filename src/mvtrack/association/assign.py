@@ -13,10 +13,14 @@ Rules (``ASSIGN_RULES``):
 - ``optimal`` — global minimum-cost exclusive assignment (``scipy.optimize.linear_sum_assignment``
   or the sparse LAPJVsp of ``scipy.sparse.csgraph.min_weight_full_bipartite_matching``), solved
   per connected component of the gate graph so the cost grows with cluster size, not N × M.
-  By default it matches as many pairs as the gate allows and, among those, minimises the total
-  cost (the classic gated global-nearest-neighbour); with ``unmatched_cost=u`` it instead
-  minimises Σ cost + u/2 per unmatched track and per unmatched detection, so a pair is only
-  worth matching when its cost is below ``u``.
+  It minimises Σ cost over the matched pairs + u/2 per unmatched track and per unmatched
+  detection (the cost-of-non-assignment form), i.e. it maximises Σ (u − cost) over the
+  matches: a pair is only worth matching when its cost is below ``u``. Passing the gate as
+  ``unmatched_cost`` gives the global-nearest-neighbour reading (maximise the total slack
+  inside the gates). The default ``u = 2 · max |cost|`` makes every gated pair worth matching
+  on its own and trades one more match against up to that much extra cost, close to
+  "as many matches as possible, then least cost" without the huge penalty an exact
+  maximum-cardinality solve needs (which makes the shortest-path solver very slow).
 
 Ties are broken deterministically by (cost, track row, detection row).
 """
@@ -38,7 +42,10 @@ FloatArray = NDArray[np.float64]
 ASSIGN_RULES = ("nearest", "greedy", "optimal")
 
 #: with solver="auto", more conflicting clusters than this are solved in one sparse problem
-SPARSE_CLUSTERS = 16
+SPARSE_CLUSTERS = 4
+#: with solver="auto", clusters (or whole frames) of at most this many tracks + detections are
+#: solved with a dense ``linear_sum_assignment``; larger ones with the sparse solver
+SMALL_NODES = 64
 
 
 @dataclass(frozen=True)
@@ -199,21 +206,25 @@ def _optimal(
     solver: str,
 ) -> tuple[IntArray, ...]:
     p = ti.shape[0]
-    if unmatched_cost is None:  # maximum cardinality first: u exceeds any cost difference
-        u = 1.0 + 2.0 * float(np.abs(cost).sum())
+    if unmatched_cost is None:  # every pair worth matching alone; see the module docstring
+        u = 2.0 * float(np.abs(cost).max()) * (1.0 + 1e-9) + 1e-12
     else:
         u = float(unmatched_cost)
+    deg_t = np.bincount(ti, minlength=n_tracks)
+    deg_d = np.bincount(dj, minlength=n_dets)
+    if deg_t.max() <= 1 and deg_d.max() <= 1:  # no conflicts at all: every pair stands alone
+        keep = cost < u
+        return ti[keep], dj[keep], cost[keep]
+    if solver != "sparse" and np.count_nonzero(deg_t) + np.count_nonzero(deg_d) <= SMALL_NODES:
+        chosen = _solve_dense(ti, dj, cost, u / 2)  # small frame: one dense solve, no clusters
+        return ti[chosen], dj[chosen], cost[chosen]
     graph = coo_array(
         (np.ones(p), (ti, n_tracks + dj)), shape=(n_tracks + n_dets, n_tracks + n_dets)
     )
     ncomp, labels = connected_components(graph, directed=False)
     lab = labels[ti]
-    has_t = np.zeros(n_tracks, dtype=bool)
-    has_t[ti] = True
-    has_d = np.zeros(n_dets, dtype=bool)
-    has_d[dj] = True
-    nt = np.bincount(labels[:n_tracks][has_t], minlength=ncomp)
-    nd = np.bincount(labels[n_tracks:][has_d], minlength=ncomp)
+    nt = np.bincount(labels[:n_tracks][deg_t > 0], minlength=ncomp)
+    nd = np.bincount(labels[n_tracks:][deg_d > 0], minlength=ncomp)
     trivial = (nt <= 1) | (nd <= 1)  # a star: every matching has at most one pair
 
     chosen = np.zeros(p, dtype=bool)
@@ -226,8 +237,12 @@ def _optimal(
     # conflicting clusters (at least two tracks and two detections)
     hard = np.flatnonzero(~trivial[lab])
     if hard.size:
-        n_hard = int(np.count_nonzero(~trivial & (nt > 0)))
-        use_sparse = solver == "sparse" or (solver == "auto" and n_hard > SPARSE_CLUSTERS)
+        hard_c = ~trivial & (nt > 0)
+        n_hard = int(np.count_nonzero(hard_c))
+        largest = int((nt + nd)[hard_c].max())
+        use_sparse = solver == "sparse" or (
+            solver == "auto" and (n_hard > SPARSE_CLUSTERS or largest > SMALL_NODES)
+        )
         if use_sparse:
             chosen[hard[_solve_sparse(ti[hard], dj[hard], cost[hard], u / 2)]] = True
         else:
@@ -263,12 +278,14 @@ def assign(
     rule : {"nearest", "greedy", "optimal"}
         See the module docstring.
     unmatched_cost : float, optional
-        ``optimal`` only: penalty ``u`` for leaving a pair's two ends unmatched (u/2 each).
-        Default: maximise the number of matches, then minimise their total cost.
+        ``optimal`` only: penalty ``u`` for leaving a pair's two ends unmatched (u/2 each);
+        a sensible value is the gate. Default ``2 · max |cost|``.
     solver : {"auto", "dense", "sparse"}
         ``optimal`` only: one ``linear_sum_assignment`` per conflicting cluster (``dense``),
-        one sparse LAPJVsp problem for all of them (``sparse``), or ``auto`` (dense up to
-        :data:`SPARSE_CLUSTERS` conflicting clusters).
+        one sparse LAPJVsp problem for all of them (``sparse``), or ``auto``: a frame with at
+        most :data:`SMALL_NODES` gated tracks + detections is one dense problem; otherwise
+        dense per cluster when there are at most :data:`SPARSE_CLUSTERS` conflicting clusters
+        of at most :data:`SMALL_NODES` nodes, else sparse.
 
     Returns
     -------

@@ -1,9 +1,10 @@
 """Gating: the (track, detection) pairs whose distance passes the gate, near-linear in N.
 
 Two stages. A *spatial pre-gate* keeps only pairs whose centre distance is within each track's
-radius bound (:func:`mvtrack.association.distances.gate_radius`), found with a KD-tree over the
-detections (:class:`scipy.spatial.cKDTree`); then the exact distance is computed on those pairs
-only and the gate applied. Small problems skip the tree and evaluate every pair.
+radius bound (:func:`mvtrack.association.distances.gate_radius`), found on a uniform grid hash
+of the detections (a KD-tree, :class:`scipy.spatial.cKDTree`, for the few unusually wide
+gates); then the exact distance is computed on those pairs only and the gate applied. Small
+problems skip the pre-gate and evaluate every pair.
 """
 
 from __future__ import annotations
@@ -35,15 +36,56 @@ def _all_pairs(n: int, m: int) -> tuple[IntArray, IntArray]:
     return ti, dj
 
 
+def _expand_ranges(owner: IntArray, lo: IntArray, hi: IntArray) -> tuple[IntArray, IntArray]:
+    """All ``(owner[r], k)`` with ``lo[r] <= k < hi[r]``, vectorised (no loop over ranges)."""
+    counts = np.maximum(hi - lo, 0)
+    total = int(counts.sum())
+    rep = np.repeat(np.arange(owner.shape[0]), counts)
+    starts = np.cumsum(counts) - counts
+    pos = np.arange(total, dtype=np.intp) - starts[rep] + lo[rep]
+    return owner[rep], pos
+
+
+def _grid_pairs(
+    track_xy: FloatArray, det_xy: FloatArray, radius: FloatArray, idx: IntArray
+) -> tuple[IntArray, IntArray]:
+    """Pairs of tracks ``idx`` and detections within ``radius``, by a uniform grid hash.
+
+    Cells are ``max(radius[idx])`` wide, so a track's ball lies in its 3 × 3 block of cells.
+    Detections are sorted by cell key ``row * ncols + col``; the three cells of one block row
+    are contiguous in that order, so each track needs three ``searchsorted`` ranges. Everything
+    is array arithmetic over all tracks at once.
+    """
+    txy = track_xy[idx]
+    origin = np.minimum(txy.min(axis=0), det_xy.min(axis=0))
+    extent = float((np.maximum(txy.max(axis=0), det_xy.max(axis=0)) - origin).max())
+    cell = max(float(radius[idx].max()), extent / 65536.0, 1e-9)  # keys stay far below 2**63
+    dc = np.floor((det_xy - origin) / cell).astype(np.int64) + 1  # +1: neighbours stay >= 0
+    tc = np.floor((txy - origin) / cell).astype(np.int64) + 1
+    ncols = int(max(dc[:, 0].max(), tc[:, 0].max())) + 2
+    dkey = dc[:, 1] * ncols + dc[:, 0]
+    order = np.argsort(dkey, kind="stable")
+    skey = dkey[order]
+    rows = (tc[:, 1, None] + np.array([-1, 0, 1])) * ncols  # (K, 3) block rows
+    lo = np.searchsorted(skey, rows + (tc[:, 0, None] - 1), side="left").ravel()
+    hi = np.searchsorted(skey, rows + (tc[:, 0, None] + 1), side="right").ravel()
+    owner = np.repeat(idx, 3)
+    ti, pos = _expand_ranges(owner, lo, hi)
+    dj = order[pos]
+    d = det_xy[dj] - track_xy[ti]
+    keep = np.einsum("pi,pi->p", d, d) <= radius[ti] ** 2
+    return ti[keep], dj[keep].astype(np.intp)
+
+
 def _spatial_pairs(
     track_xy: FloatArray, det_xy: FloatArray, radius: FloatArray
 ) -> tuple[IntArray, IntArray]:
     """Pairs with ``|det − track| <= radius[track]``, sorted by track then detection.
 
-    Tracks with a radius near the common one are found together with one tree-against-tree
-    query (:meth:`cKDTree.sparse_distance_matrix`); tracks with a much larger radius (long
-    coasting, huge covariance) are queried one ball each, and unbounded ones take every
-    detection, so one wide gate does not widen every track's search.
+    Tracks with a radius near the common one are found together on a uniform grid
+    (:func:`_grid_pairs`); tracks with a much larger radius (long coasting, huge covariance)
+    are queried one ball each in a KD-tree (:class:`scipy.spatial.cKDTree`), and unbounded
+    ones take every detection, so one wide gate does not widen every track's search.
     """
     n, m = track_xy.shape[0], det_xy.shape[0]
     if n == 0 or m == 0:
@@ -52,21 +94,16 @@ def _spatial_pairs(
     finite = np.isfinite(radius)
     ref = np.median(radius[finite]) if finite.any() else 0.0
     common = finite & (radius <= 2.0 * ref)
-    det_tree = cKDTree(det_xy)
     parts_t: list[IntArray] = []
     parts_d: list[IntArray] = []
     idx_common = np.flatnonzero(common)
     if idx_common.size:
-        rmax = float(radius[idx_common].max())
-        trk_tree = cKDTree(track_xy[idx_common])
-        sdm = trk_tree.sparse_distance_matrix(det_tree, rmax, output_type="ndarray")
-        ti = idx_common[sdm["i"]]
-        keep = sdm["v"] <= radius[ti]
-        parts_t.append(ti[keep])
-        parts_d.append(sdm["j"][keep].astype(np.intp))
+        t, d = _grid_pairs(track_xy, det_xy, radius, idx_common)
+        parts_t.append(t)
+        parts_d.append(d)
     idx_wide = np.flatnonzero(finite & ~common)
     if idx_wide.size:  # few tracks: one ball query each, flattened without a Python loop body
-        balls = det_tree.query_ball_point(track_xy[idx_wide], radius[idx_wide])
+        balls = cKDTree(det_xy).query_ball_point(track_xy[idx_wide], radius[idx_wide])
         counts = np.fromiter((len(b) for b in balls), dtype=np.intp, count=idx_wide.size)
         parts_t.append(np.repeat(idx_wide, counts))
         parts_d.append(
@@ -78,7 +115,7 @@ def _spatial_pairs(
         parts_d.append(np.tile(np.arange(m, dtype=np.intp), idx_inf.size))
     ti = np.concatenate(parts_t)
     dj = np.concatenate(parts_d)
-    order = np.lexsort((dj, ti))
+    order = np.argsort(ti.astype(np.int64) * m + dj, kind="stable")
     return ti[order], dj[order]
 
 
@@ -88,7 +125,7 @@ def candidate_pairs(
     distance: str | Distance = "euclidean",
     gate: float | None = None,
     *,
-    method: Literal["auto", "dense", "kdtree"] = "auto",
+    method: Literal["auto", "dense", "grid"] = "auto",
     **params: Any,
 ) -> tuple[IntArray, IntArray, FloatArray]:
     """Gated (track, detection) pairs and their distances.
@@ -103,9 +140,10 @@ def candidate_pairs(
         Name in :data:`mvtrack.association.distances.DISTANCES`.
     gate : float, optional
         Pairs with value ``<= gate`` pass; default: the distance's default gate.
-    method : {"auto", "dense", "kdtree"}
-        ``dense`` evaluates all ``N × M`` pairs; ``kdtree`` pre-gates spatially with each
-        track's radius bound; ``auto`` picks dense below :data:`DENSE_PAIRS` pairs.
+    method : {"auto", "dense", "grid"}
+        ``dense`` evaluates all ``N × M`` pairs; ``grid`` pre-gates spatially with each
+        track's radius bound (uniform grid hash, KD-tree for unusually wide gates); ``auto``
+        picks dense below :data:`DENSE_PAIRS` pairs.
     **params
         Parameters of the distance (e.g. ``rho`` for ``coupled``).
 
@@ -120,8 +158,10 @@ def candidate_pairs(
     g = dist.gate if gate is None else float(gate)
     det_xy, _ = det_arrays(dets)
     n, m = len(view), det_xy.shape[0]
-    if method not in ("auto", "dense", "kdtree"):
+    if method not in ("auto", "dense", "grid"):
         raise ValueError(f"candidate_pairs: unknown method {method!r}")
+    if not (np.isfinite(view.xy).all() and np.isfinite(det_xy).all()):
+        raise ValueError("candidate_pairs: track or detection positions contain NaN or inf")
     if method == "dense" or (method == "auto" and n * m <= DENSE_PAIRS):
         ti, dj = _all_pairs(n, m)
     else:
