@@ -102,6 +102,14 @@ def oracle(seq: str, gt: MotTable, seeds: int) -> dict[str, dict[str, float]]:
     }
 
 
+#: Sensitivity of the default combination: (label, config changes, coasting rows written).
+SENSITIVITY: tuple[tuple[str, dict[str, Any], bool], ...] = tuple(
+    (f"r = {'default' if r is None else f'{r:g} px²'}, coasting rows {'in' if c else 'out'}",
+     {} if r is None else {"predictor_params": {"r": r}}, c)
+    for r in (None, 25.0, 100.0) for c in (True, False)
+)
+
+
 @dataclass(frozen=True)
 class Combo:
     """One tracker configuration of the grid."""
@@ -132,13 +140,18 @@ def grid() -> list[Combo]:
 
 
 def run_one(
-    combo: Combo, frames: list[Detections], gt: MotTable, coasting: bool = True
+    combo: Combo, frames: list[Detections], gt: MotTable, coasting: bool = True,
+    changes: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """Track ``frames`` with ``combo`` on top of the default configuration and score it."""
+    """Track ``frames`` with ``combo`` on top of the default configuration and score it.
+
+    ``changes`` replaces further fields of the configuration (sensitivity runs).
+    """
     from mvtrack.tracking import default, track_detections
 
     config = default(fps=FPS).replace(
-        predictor=combo.predictor, distance=combo.distance, assign=combo.assign, gate=None
+        predictor=combo.predictor, distance=combo.distance, assign=combo.assign, gate=None,
+        **(changes or {}),
     )
     t0 = time.perf_counter()
     log = track_detections(frames, config)
@@ -162,6 +175,26 @@ def _mean(runs: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
+def code_version() -> str:
+    """``git describe`` of the checkout, noting uncommitted changes to the tracking code."""
+    import subprocess
+
+    root = Path(__file__).resolve().parents[1]
+    try:
+        head = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--", "src/mvtrack/tracking",
+             "src/mvtrack/association", "src/mvtrack/filters"],
+            cwd=root, capture_output=True, text=True, check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return f"{head} (with uncommitted changes to the tracker)" if dirty else head
+
+
 def _score(r: dict[str, Any]) -> float:
     """Ranking key of one result: MOTA + IDF1."""
     return float(r["MOTA"] + r["IDF1"])
@@ -175,6 +208,7 @@ def report(
     results: dict[str, dict[str, dict[str, Any]]], combos: list[Combo], default: Combo,
     command: str, seeds: int, elapsed: float, coasting: bool = True,
     oracles: dict[str, dict[str, dict[str, float]]] | None = None,
+    sensitivity: dict[str, dict[str, dict[str, Any]]] | None = None,
 ) -> str:
     """The Markdown fragment docs/bench/tud.md."""
     settings = [f"{s}|{k}" for k in DET_KINDS for s in SEQUENCES]
@@ -208,15 +242,17 @@ def report(
         command,
         "```",
         "",
-        f"Measured on a shared 2-core machine (Python {platform.python_version()}); "
+        f"Measured on a shared 2-core machine (Python {platform.python_version()}, code "
+        f"{code_version()}); "
         f"whole grid {elapsed / 60:.1f} min. Peers: the best of several open-source trackers "
         "measured on this machine on the same detections.",
         "",
         "### Best peer, our default and our best combination (MOTA / IDF1)",
         "",
         "| sequence, detections | detections with true IDs | best peer | ours, default "
-        f"({default.name}) | ours, best for this column | best overall ({best_overall.name}) |",
-        "|---|---|---|---|---|---|",
+        f"({default.name}) | default − peer | ours, best for this column "
+        f"| best overall ({best_overall.name}) |",
+        "|---|---|---|---|---|---|---|",
     ]
     for s in settings:
         seq, kind = s.split("|")
@@ -230,6 +266,7 @@ def report(
         lines.append(
             f"| {label[s]} | {orc_text} | {peer} {p_mota:.3f} / {p_idf1:.3f} "
             f"| {_fmt(d['MOTA'])} / {_fmt(d['IDF1'])} "
+            f"| {d['MOTA'] - p_mota:+.3f} / {d['IDF1'] - p_idf1:+.3f} "
             f"| {_fmt(b['MOTA'])} / {_fmt(b['IDF1'])} ({best.name}) "
             f"| {_fmt(o['MOTA'])} / {_fmt(o['IDF1'])} |"
         )
@@ -237,6 +274,24 @@ def report(
         "",
         "*Detections with true IDs*: the input boxes scored with their true identities and no "
         "tracking (for test.txt, its own IDs) — a reference for what the boxes alone give.",
+    ]
+    if sensitivity:
+        lines += [
+            "",
+            f"### Sensitivity of the default combination ({default.name})",
+            "",
+            "Measurement variance `r` of the predictor (px², per axis) and whether rows of "
+            "coasting tracks are written (MOTA / IDF1). These settings were chosen by looking at "
+            "these very sequences, so they are an upper bound, not a fair comparison with the "
+            "peers.",
+            "",
+            "| setting | " + " | ".join(label[s] for s in settings) + " |",
+            "|---|" + "---|" * len(settings),
+        ]
+        for name, res in sensitivity.items():
+            cells = [f"{_fmt(res[s]['MOTA'])} / {_fmt(res[s]['IDF1'])}" for s in settings]
+            lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    lines += [
         "",
         "### Every combination (MOTA / IDF1 / HOTA), sorted by mean MOTA + IDF1",
         "",
@@ -304,9 +359,21 @@ def main(argv: list[str] | None = None) -> int:
                 f"IDF1 {_fmt(r['IDF1'])} HOTA {_fmt(r['HOTA'])} {r['ms_per_frame']:.2f} ms/frame",
                 flush=True,
             )
+    sensitivity: dict[str, dict[str, dict[str, Any]]] = {}
+    if not args.quick:
+        for name, changes, coast in SENSITIVITY:
+            sensitivity[name] = {
+                key: _mean([run_one(default, f, gts[key.split("|")[0]], coast, changes)
+                            for f in variants])
+                for key, variants in inputs.items()
+            }
+            print(f"sensitivity {name}: " + "  ".join(
+                f"{k} {_fmt(v['MOTA'])}/{_fmt(v['IDF1'])}" for k, v in sensitivity[name].items()
+            ), flush=True)
     elapsed = time.perf_counter() - t0
     if args.json is not None:
-        write_json(args.json, {"seeds": args.seeds, "default": default.name, "results": results})
+        write_json(args.json, {"seeds": args.seeds, "default": default.name, "results": results,
+                               "sensitivity": sensitivity})
     for c in combos:  # failed runs rank last
         for r in results[c.name].values():
             for k in ("MOTA", "IDF1"):
@@ -315,7 +382,7 @@ def main(argv: list[str] | None = None) -> int:
     command = "python benchmarks/bench_tud.py " + " ".join(given)
     write_text(args.out, report(
         results, combos, default, command.strip(), args.seeds, elapsed, not args.no_coasting,
-        {s: oracle(s, gts[s], args.seeds) for s in SEQUENCES},
+        {s: oracle(s, gts[s], args.seeds) for s in SEQUENCES}, sensitivity,
     ))
     print(f"wrote {args.out}")
     return 0
