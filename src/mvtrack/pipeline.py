@@ -7,8 +7,9 @@
            ─▶ TrackFrame per frame ─▶ results, annotated video, plots
 
 Stopped vehicles fade into the disturbance-map background (§1.1 step 3); a *rescuer*
-(template matching, :class:`TemplateRescuer`) is consulted by the tracker for confirmed tracks
-that got no detection and holds them in state STOPPED.
+(template matching, :class:`StoppedVehicleRescuer` around
+:class:`~mvtrack.detection.template.TemplateRescuer`) is consulted by the tracker for confirmed
+tracks that got no detection and holds them in state STOPPED.
 
 :func:`run_frames` is the loop and knows only small interfaces (a detector is a callable
 ``frame -> Detections``, a tracker has ``step(dets, rescue=None) -> TrackFrame``), so the tests
@@ -58,8 +59,8 @@ class StepTracker(Protocol):
 class Rescuer(Protocol):
     """Finds confirmed tracks that lost their detection (stopped vehicles)."""
 
-    def callback(self, image: Image) -> RescueFn | None:
-        """The ``rescue`` argument of ``tracker.step`` for this frame."""
+    def callback(self, image: Image, dets: Detections) -> RescueFn | None:
+        """The ``rescue`` argument of ``tracker.step`` for this frame and its detections."""
         ...
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
@@ -180,7 +181,7 @@ def run_frames(
                 result.error = str(exc)
                 break
             dets = _with_frame(detector(image), k)
-            rescue = rescuer.callback(image) if rescuer is not None else None
+            rescue = rescuer.callback(image, dets) if rescuer is not None else None
             tracks = tracker.step(dets, rescue=rescue)
             if rescuer is not None:
                 rescuer.observe(image, dets, tracks)
@@ -203,6 +204,37 @@ def run_frames(
 
 
 # --------------------------------------------------------------------------- building parts
+
+
+#: the image size the papers' pixel parameters refer to (SPEC §1.4: 320×240)
+REFERENCE_SIZE = (320, 240)
+
+
+def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSettings:
+    """Fill in the size-dependent defaults the user left open, for a ``size`` (W, H) video.
+
+    With ``s² = W·H / (320·240)`` (the papers' 320×240, SPEC §1.4):
+
+    - blob stage: ``min_area = 40 s²`` px and a ``close_size ≈ 7 s`` px closing (odd), which
+      merges the fragments of one object — two-tone vehicles and clothes otherwise split into
+      several blobs, the "segmentation splits vehicles by colour" of paper 1 (SPEC §1.5);
+      SPEC §1.1 [R] (opening only, area ≥ 20 px) is ``close_size = 0, min_area = 20``;
+    - the default tracker preset's Kalman predictors: measurement variance ``r = 4 s²`` px²
+      (SPEC §2.1 [R] gives 4 px² at 320×240; blob centroids jitter with the blob's size).
+
+    Values present in ``settings`` are kept; the paper presets are not touched.
+    """
+    w, h = size
+    s2 = (w * h) / (REFERENCE_SIZE[0] * REFERENCE_SIZE[1])
+    det = dict(settings.detector_params)
+    det.setdefault("min_area", float(round(40.0 * s2)))
+    det.setdefault("close_size", int(2 * round((7.0 * s2**0.5 - 1) / 2) + 1))
+    tracker = dict(settings.tracker)
+    predictor = str(tracker.get("predictor", "kalman-cv"))
+    if (tracker.get("preset", "default") == "default" and "predictor_params" not in tracker
+            and predictor.startswith("kalman")):
+        tracker["predictor_params"] = {"r": round(4.0 * s2, 3)}
+    return dataclasses.replace(settings, detector_params=det, tracker=tracker)
 
 
 def build_detector(settings: RunSettings) -> Callable[[Image], Detections]:
@@ -256,32 +288,132 @@ def build_tracker(settings: RunSettings, fps: float) -> Any:
         raise InputError(f"tracker settings: {exc}") from None
 
 
-def build_rescuer(settings: RunSettings) -> Rescuer | None:
-    """Template matching for stopped vehicles (paper 1 §1.1 step 3), or None if unavailable."""
+def build_rescuer(settings: RunSettings, tracker: Any) -> Rescuer:
+    """Template matching for stopped vehicles (paper 1 §1.1 step 3) attached to ``tracker``.
+
+    A :class:`~mvtrack.detection.template.TemplateBank` with ``settings.template_params``
+    (NCC ≥ 0.8 inside the gate radius, SPEC §1.1 [R]) in its
+    :class:`~mvtrack.detection.template.TemplateRescuer`, guarded by
+    :class:`StoppedVehicleRescuer`.
+    """
+    from mvtrack.detection.template import TemplateBank, TemplateRescuer
+
+    params = dict(settings.template_params)
+    guard = {k: params.pop(k) for k in ("min_travel", "max_shift") if k in params}
     try:
-        from mvtrack.detection.template import TemplateBank
-    except ImportError:  # pragma: no cover - the template module is optional
-        return None
-    try:
-        bank = TemplateBank(**settings.template_params)
+        bank = TemplateBank(**params)
     except TypeError as exc:
         raise InputError(f"template settings: {exc}") from None
-    return TemplateRescuer(bank)
+    return StoppedVehicleRescuer(TemplateRescuer(bank, tracker), tracker, **guard)
 
 
-class TemplateRescuer:
-    """Adapter between a template bank and the tracker's ``rescue`` callback."""
+class StoppedVehicleRescuer:
+    """Template matching restricted to what a stopped vehicle looks like.
 
-    def __init__(self, bank: Any) -> None:
-        self.bank = bank
+    Paper 1 uses template matching for one case: a vehicle that *stopped* and faded into the
+    disturbance-map background (SPEC §1.1 step 3). A bare NCC search also "finds" other things,
+    and a track held that way never ends:
 
-    def callback(self, image: Image) -> RescueFn | None:
-        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` searching ``image``."""
-        raise NotImplementedError
+    - a track that never moved (a ghost blob where a parked vehicle left, a pole flickering
+      under camera jitter) has a template of static scenery, which matches forever;
+    - a duplicate track (two blobs of one two-tone vehicle) whose detection went to its twin
+      follows the moving vehicle by template, frame after frame.
+
+    So a match is accepted only if the track has travelled at least ``min_travel`` px from
+    where it was born, the match lies within ``max_shift`` px of its last measured position
+    (a stopped vehicle stands where it was last seen), and no detection of this frame covers
+    the match (a detected object has not faded). All checks are array operations over the
+    missed tracks.
+
+    Parameters
+    ----------
+    inner : TemplateRescuer
+        The NCC search (:mod:`mvtrack.detection.template`).
+    tracker : mvtrack.tracking.Tracker
+        Its ``tracks`` table gives each uid's last measurement.
+    min_travel : float
+        Pixels a track must have moved since birth to be rescued.
+    max_shift : float
+        Largest distance (px) between the match and the last measured position.
+    """
+
+    def __init__(
+        self, inner: Any, tracker: Any, min_travel: float = 10.0, max_shift: float = 4.0
+    ) -> None:
+        if not (min_travel >= 0 and max_shift > 0):
+            raise InputError(
+                f"template settings: min_travel must be >= 0 and max_shift > 0, got "
+                f"{min_travel} and {max_shift}"
+            )
+        self.inner = inner
+        self.tracker = tracker
+        self.min_travel = float(min_travel)
+        self.max_shift = float(max_shift)
+        self._uid = np.zeros(0, np.int64)  # sorted uids seen so far
+        self._birth = np.zeros((0, 2))  # their first measured position
+        self._travel = np.zeros(0)  # the farthest they got from it
+
+    def _lookup(self, uids: NDArray[np.int64]) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
+        pos = np.searchsorted(self._uid, uids)
+        ok = pos < self._uid.size
+        ok[ok] = self._uid[pos[ok]] == uids[ok]
+        return np.minimum(pos, max(self._uid.size - 1, 0)), ok
+
+    def callback(self, image: Image, dets: Detections) -> RescueFn:
+        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for this frame."""
+        search = self.inner.callback(image)
+        tab = self.tracker.tracks
+
+        def rescue(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any]:
+            uids = np.asarray(uids, np.int64).reshape(-1)
+            k = uids.size
+            found = np.zeros(k, bool)
+            xy = np.full((k, 2), np.nan)
+            if self._uid.size == 0:
+                return found, xy
+            pos, known = self._lookup(uids)
+            moved = known & (self._travel[pos] >= self.min_travel)
+            if not moved.any():
+                return found, xy
+            f_sub, xy_sub = search(uids[moved], np.asarray(predicted_xy)[moved],
+                                   np.asarray(wh)[moved])
+            found[moved] = np.asarray(f_sub, bool)
+            xy[moved] = np.asarray(xy_sub, np.float64)
+            # the match must sit where the vehicle was last measured (it stands still)
+            order = np.argsort(tab.uid)
+            at = order[np.searchsorted(tab.uid[order], uids)]
+            last = tab.last_xy[at]
+            found &= np.hypot(*(xy - last).T) <= self.max_shift
+            # and no detection may cover it (a detected object has not faded)
+            if len(dets) and found.any():
+                lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
+                inside = ((xy[:, None, :] >= lo[None]) & (xy[:, None, :] <= hi[None])).all(2)
+                found &= ~inside.any(axis=1)
+            xy[~found] = np.nan
+            return found, xy
+
+        return rescue
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
-        """Store the appearance of tracks that were detected this frame."""
-        raise NotImplementedError
+        """Feed the template bank; remember each track's birth place and travel."""
+        self.inner.observe(image, dets, tracks)
+        tab = self.tracker.tracks
+        uid = np.asarray(tab.uid, np.int64)
+        last = np.asarray(tab.last_xy, np.float64).reshape(-1, 2)
+        pos, known = self._lookup(uid)
+        if (~known).any():
+            allu = np.concatenate([self._uid, uid[~known]])
+            order = np.argsort(allu, kind="stable")
+            self._uid = allu[order]
+            self._birth = np.vstack([self._birth, last[~known]])[order]
+            self._travel = np.concatenate([self._travel, np.zeros(int((~known).sum()))])[order]
+            pos, known = self._lookup(uid)
+        dist = np.hypot(*(last - self._birth[pos]).T)
+        np.maximum.at(self._travel, pos, dist)
+        alive = np.isin(self._uid, uid)  # forget deleted tracks
+        self._uid, self._birth, self._travel = (
+            self._uid[alive], self._birth[alive], self._travel[alive]
+        )
 
 
 # --------------------------------------------------------------------------- gate overlay
@@ -385,7 +517,9 @@ def track_to_folder(
 
     Files (each written atomically; a failure leaves no partial file):
 
-    - ``results.txt`` — MOTChallenge results (frame, id, left, top, w, h, conf, -1, -1, -1);
+    - ``results.txt`` — MOTChallenge results (frame, id, left, top, w, h, conf, -1, -1, -1)
+      of the rows with a measurement (confirmed, or stopped and held by template matching);
+      coasting predictions are drawn in the video but not written;
     - ``tracks.mp4`` — the annotated video (unless ``settings.video`` is False): boxes in
       their state colour, IDs, trails and the predicted gates (ellipse or circle);
     - ``trajectories.png`` — every track's path over the first frame;
@@ -428,10 +562,11 @@ def track_to_folder(
     from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
 
     if parts is None:
+        settings = resolve_settings(settings, size)
         detector, tracker = build_detector(settings), build_tracker(settings, fps)
     else:
         detector, tracker = parts
-    rescuer = build_rescuer(settings) if settings.templates else None
+    rescuer = build_rescuer(settings, tracker) if settings.templates else None
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths: dict[str, Path] = {}
@@ -474,7 +609,7 @@ def track_to_folder(
             result.error = source_error()
 
     paths["results"] = out / "results.txt"
-    log.write_mot(paths["results"])
+    log.write_mot(paths["results"], include_coasting=False)
     rows = TrackRows.from_frames(log)
     lengths = _track_lengths(log)
     name = Path(source).name if source else "video"

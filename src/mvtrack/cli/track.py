@@ -86,7 +86,12 @@ def register(app: typer.Typer) -> None:
         from mvtrack.config import DETECTORS, RunSettings, load_config
         from mvtrack.errors import InputError
         from mvtrack.io.video import open_source
-        from mvtrack.pipeline import build_detector, build_tracker, track_to_folder
+        from mvtrack.pipeline import (
+            build_detector,
+            build_tracker,
+            resolve_settings,
+            track_to_folder,
+        )
 
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
@@ -111,6 +116,7 @@ def register(app: typer.Typer) -> None:
         # Everything that can be wrong with the input fails here, before any file is written.
         src = open_source(video, fps=fps)
         with src:
+            settings = resolve_settings(settings, src.size)
             parts = (build_detector(settings), build_tracker(settings, src.fps))
             run = track_to_folder(
                 (frame for _, frame in src), fps=src.fps, size=src.size, settings=settings,

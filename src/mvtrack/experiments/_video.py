@@ -1,0 +1,225 @@
+"""Shared machinery of the video experiments (X4, X5, X8): render, track, match to the truth.
+
+A scene is rendered (:func:`mvtrack.sim.render.render_frames`), sent through the whole video
+pipeline (disturbance map → tracker, with template matching for stopped vehicles), and the
+output rows are matched to the ground truth frame by frame: a track row and a visible
+ground-truth box are paired by minimum total centre distance (Hungarian, per frame) when their
+centres are closer than ``max(min_px, frac · max(w, h))`` of the ground-truth box. From the
+pairs come the per-track majority object, the tracks per object and each object's coverage by
+its best single track.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linear_sum_assignment
+
+from mvtrack.config import RunSettings
+from mvtrack.pipeline import PipelineResult, build_rescuer, resolve_settings, run_frames
+from mvtrack.sim.scenes import Scene
+from mvtrack.tracking import Tracker, TrackerConfig, TrackLog
+
+IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+
+
+@dataclass
+class SceneRun:
+    """One tracked rendering of a scene."""
+
+    scene: Scene
+    log: TrackLog
+    result: PipelineResult
+    match: Matching
+
+
+def track_scene(
+    scene: Scene,
+    config: TrackerConfig,
+    *,
+    seed: int,
+    detector: str = "disturbance-map",
+    detector_params: dict[str, Any] | None = None,
+    templates: bool = True,
+    frames: list[NDArray[np.uint8]] | None = None,
+    prime: int = 0,
+) -> SceneRun:
+    """Render ``scene`` with ``seed`` (or use ``frames``), track it, match to the truth.
+
+    ``prime`` > 0 first shows the detector that many frames of the empty scene
+    (:func:`mvtrack.sim.render.render_background`), as a camera that has been running before
+    the sequence starts: the disturbance map's background then holds the empty road instead of
+    ``B_0 = I_0`` with the vehicles in it (which leaves a ghost blob behind every vehicle that
+    is in view at frame 0).
+    """
+    from mvtrack.detection import make_detector
+    from mvtrack.sim.render import render_background, render_frames
+
+    if detector_params is None:  # the pipeline's defaults for this image size
+        detector_params = resolve_settings(RunSettings(), scene.size).detector_params
+    det = make_detector(detector, **detector_params)
+    if prime > 0:
+        empty = render_background(scene, seed)
+        for _ in range(prime):
+            det(empty)
+    tracker = Tracker(config)
+    rescuer = build_rescuer(RunSettings(), tracker) if templates else None
+    source = frames if frames is not None else render_frames(scene, seed)
+    result = run_frames(source, det, tracker, rescuer=rescuer, progress=False)
+    log = TrackLog()
+    for tf in result.tracks:
+        log.append(tf)
+    return SceneRun(scene, log, result, match_to_truth(scene, log))
+
+
+@dataclass
+class Matching:
+    """Frame-by-frame pairs of output rows and visible ground-truth rows.
+
+    Attributes
+    ----------
+    gt_frame, gt_id : (G,) int64
+        The visible ground-truth rows.
+    gt_track : (G,) int64
+        Track ID paired with each ground-truth row (−1: none).
+    row_frame, row_track, row_gt : (R,) int64
+        Output rows with a public ID, and the object each is paired with (0: none).
+    row_assoc : (R,) bool
+        The row used a detection (``det_index ≥ 0``).
+    """
+
+    gt_frame: IntArray
+    gt_id: IntArray
+    gt_track: IntArray
+    row_frame: IntArray
+    row_track: IntArray
+    row_gt: IntArray
+    row_assoc: NDArray[np.bool_]
+
+    def associations(self) -> tuple[IntArray, IntArray]:
+        """Track IDs and the number of detections each was associated with."""
+        ids, inv = np.unique(self.row_track, return_inverse=True)
+        return ids, np.bincount(inv, weights=self.row_assoc).astype(np.int64)
+
+    def majority(self, min_assoc: int = 1) -> tuple[IntArray, IntArray, FloatArray]:
+        """Per track with ≥ ``min_assoc`` associations: its majority object and that share.
+
+        Returns track IDs, the object each follows most (0 when most of its rows are paired
+        with nothing: a spurious track) and the share of its rows paired with that object.
+        """
+        ids, n_assoc = self.associations()
+        ids = ids[n_assoc >= min_assoc]
+        obj = np.zeros(ids.size, np.int64)
+        share = np.zeros(ids.size)
+        if ids.size == 0:
+            return ids, obj, share
+        n_obj = int(max(self.row_gt.max(initial=0), self.gt_id.max(initial=0))) + 1
+        pos = np.searchsorted(ids, self.row_track)
+        inside = pos < ids.size
+        inside[inside] = ids[pos[inside]] == self.row_track[inside]
+        counts = np.zeros((ids.size, n_obj), np.int64)
+        np.add.at(counts, (pos[inside], self.row_gt[inside]), 1)
+        obj = counts.argmax(axis=1)
+        share = counts[np.arange(ids.size), obj] / np.maximum(counts.sum(axis=1), 1)
+        return ids, obj.astype(np.int64), share
+
+    def coverage(self, obj_id: int) -> tuple[int, float, int]:
+        """Best single track of object ``obj_id``, the share of its visible frames it holds,
+        and the number of distinct tracks ever paired with it."""
+        sel = self.gt_id == obj_id
+        tracks = self.gt_track[sel]
+        n = int(sel.sum())
+        held = tracks[tracks > 0]
+        if n == 0 or held.size == 0:
+            return -1, 0.0, 0
+        ids, counts = np.unique(held, return_counts=True)
+        best = int(counts.argmax())
+        return int(ids[best]), float(counts[best] / n), int(ids.size)
+
+    def sequence(self, obj_id: int) -> tuple[IntArray, IntArray]:
+        """Frames where ``obj_id`` is visible and the track paired with it (−1: none)."""
+        sel = self.gt_id == obj_id
+        return self.gt_frame[sel], self.gt_track[sel]
+
+
+def match_to_truth(
+    scene: Scene, log: TrackLog, min_px: float = 6.0, frac: float = 0.75
+) -> Matching:
+    """Pair output rows with visible ground-truth rows per frame (see module docstring)."""
+    cols = log.columns()
+    keep = cols["track_id"] > 0
+    r_frame = cols["frame"][keep]
+    r_id = cols["track_id"][keep]
+    r_xy = cols["filtered_xy"][keep]
+    r_assoc = cols["det_index"][keep] >= 0
+    vis = scene.visible
+    g_frame, g_id, g_xy, g_wh = scene.frame[vis], scene.id[vis], scene.xy[vis], scene.wh[vis]
+    g_track = np.full(g_frame.size, -1, np.int64)
+    r_gt = np.zeros(r_frame.size, np.int64)
+    n = int(max(scene.n_frames, r_frame.max(initial=-1) + 1))
+    g_start = np.searchsorted(g_frame, np.arange(n + 1))
+    order = np.argsort(r_frame, kind="stable")
+    r_start = np.searchsorted(r_frame[order], np.arange(n + 1))
+    thr = np.maximum(min_px, frac * g_wh.max(axis=1))
+    for f in range(n):  # one small assignment per frame
+        gs = slice(g_start[f], g_start[f + 1])
+        rs = order[r_start[f] : r_start[f + 1]]
+        if gs.start == gs.stop or rs.size == 0:
+            continue
+        d = np.linalg.norm(g_xy[gs][:, None, :] - r_xy[rs][None, :, :], axis=2)
+        ok = d <= thr[gs][:, None]
+        if not ok.any():
+            continue
+        cost = np.where(ok, d, 1e6)
+        gi, rj = linear_sum_assignment(cost)
+        good = ok[gi, rj]
+        gi, rj = gi[good], rj[good]
+        g_track[gs.start + gi] = r_id[rs[rj]]
+        r_gt[rs[rj]] = g_id[gs.start + gi]
+    return Matching(g_frame, g_id, g_track, r_frame, r_id, r_gt, r_assoc)
+
+
+def breaks(frames: IntArray, tracks: IntArray) -> list[tuple[int, int, int]]:
+    """Where the track paired with an object changes: ``(frame, old_id, new_id)``.
+
+    Gaps (−1) are skipped: a change is a new track ID after a different one.
+    """
+    held = tracks > 0
+    f, t = frames[held], tracks[held]
+    change = np.flatnonzero(t[1:] != t[:-1]) + 1
+    return [(int(f[i]), int(t[i - 1]), int(t[i])) for i in change]
+
+
+def summarise(run: SceneRun, min_assoc: int = 5) -> dict[str, Any]:
+    """Track counts of a run: tracks with ≥ ``min_assoc`` associations, tracks per object
+    (by majority pairing), spurious tracks (paired with nothing most of the time), and per
+    object its best track's coverage and the number of distinct tracks that held it."""
+    ids, obj, _ = run.match.majority(min_assoc)
+    n_obj = run.scene.n_objects
+    per_object = np.bincount(obj, minlength=n_obj + 1)
+    coverage = {}
+    for v in range(1, n_obj + 1):
+        best, cov, n_tracks = run.match.coverage(v)
+        coverage[v] = {"track": best, "coverage": round(cov, 4), "tracks_seen": n_tracks}
+    return {
+        "tracks": int(ids.size),
+        "tracks_per_object": {int(v): int(per_object[v]) for v in range(1, n_obj + 1)},
+        "spurious": int((obj == 0).sum()),
+        "coverage": coverage,
+        "frames": run.result.n_frames,
+        "fps": round(run.result.fps, 1),
+    }
+
+
+def trajectory_plot(run: SceneRun, title: str) -> Any:
+    """The run's trajectories over the empty scene."""
+    from mvtrack.sim.render import render_background
+    from mvtrack.viz.plots import TrackRows, trajectory_figure
+
+    rows = TrackRows.from_frames(run.log)
+    bg = render_background(run.scene, 0)
+    return trajectory_figure(rows, run.scene.size, bg, title=title, min_length=5)

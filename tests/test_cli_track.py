@@ -1,0 +1,145 @@
+"""``mvtrack track``: files written for a good video, one-line errors and no files for bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from mvtrack.cli import main
+from mvtrack.cli.track import parse_gate
+from mvtrack.config import RunSettings, load_config
+from mvtrack.errors import InputError
+
+
+def _write_avi(path: Path, n: int = 40) -> Path:
+    """A small MJPG video with one bright box moving right."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15, (96, 64))
+    assert writer.isOpened()
+    for k in range(n):
+        img = np.full((64, 96, 3), 80, np.uint8)
+        if k >= 8:
+            x = 10 + 2 * (k - 8)
+            img[28:36, x : x + 10] = 230
+        writer.write(img)
+    writer.release()
+    return path
+
+
+def _one_line_error(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("error:"), err
+    assert "Traceback" not in err
+    return err
+
+
+def test_missing_video_is_one_line_error_and_writes_nothing(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    code = main(["track", str(tmp_path / "nope.avi"), "--out", str(out)])
+    assert code == 2
+    assert "nope.avi" in _one_line_error(capsys)
+    assert not out.exists()
+
+
+def test_unreadable_video_is_one_line_error(tmp_path, capsys) -> None:
+    bad = tmp_path / "bad.avi"
+    bad.write_bytes(b"this is not a video" * 10)
+    out = tmp_path / "out"
+    assert main(["track", str(bad), "--out", str(out)]) == 2
+    assert "bad.avi" in _one_line_error(capsys)
+    assert not out.exists()
+
+
+def test_bad_config_key_is_one_line_error_and_writes_nothing(tmp_path, capsys) -> None:
+    video = _write_avi(tmp_path / "v.avi")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[tracker]\npredictor = "rls"\ngaet = 4.0\n')
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--config", str(cfg)]) == 2
+    err = _one_line_error(capsys)
+    assert "gaet" in err and "c.toml" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "needle"),
+    [
+        ("[trackr]\n", "trackr"),
+        ('[detector]\nname = "yolo"\n', "yolo"),
+        ("[video]\ntrail = 1\n", "trail"),
+        ("[video]\nwrite = 3\n", "video.write"),
+        ("[tracker\n", "invalid TOML"),
+    ],
+)
+def test_config_errors_name_the_key(tmp_path, text: str, needle: str) -> None:
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    with pytest.raises(InputError, match=needle):
+        load_config(cfg)
+
+
+def test_config_values_are_read(tmp_path) -> None:
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(
+        '[tracker]\npreset = "paper1"\npredictor = "rls"\ngate = 100.0\n'
+        '[detector]\nname = "mog2"\n[templates]\nenabled = false\n'
+        "[video]\nwrite = false\ntrail = 12\n"
+    )
+    s = load_config(cfg)
+    assert s.tracker == {"preset": "paper1", "predictor": "rls", "gate": 100.0}
+    assert (s.detector, s.templates, s.video, s.trail) == ("mog2", False, False, 12)
+    assert s.with_overrides(gate=None, predictor="kalman-ca").tracker["predictor"] == "kalman-ca"
+    assert RunSettings().detector == "disturbance-map"
+
+
+def test_gate_option_accepts_a_radius_in_pixels() -> None:
+    assert parse_gate("20px") == 400.0
+    assert parse_gate("9.21") == 9.21
+    assert parse_gate(None) is None
+    for bad in ("-3", "0px", "wide", "nan"):
+        with pytest.raises(ValueError, match="--gate"):
+            parse_gate(bad)
+
+
+def test_track_writes_all_files(tmp_path, capsys) -> None:
+    video = _write_avi(tmp_path / "v.avi")
+    out = tmp_path / "out"
+    code = main(["track", str(video), "--out", str(out), "--preset", "paper1",
+                 "--predictor", "kalman-ca", "--gate", "10px"])
+    assert code == 0, capsys.readouterr().err
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["results.txt", "summary.json", "tracks.mp4", "trajectories.png"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 40 and summary["ended_early"] is False
+    assert summary["tracker"]["predictor"] == "kalman-ca" and summary["tracker"]["gate"] == 100.0
+    assert summary["tracker"]["distance"] == "euclidean"
+    assert summary["video_fps"] == 15.0
+    # the moving box (visible from frame 8) is followed in every frame, by few tracks
+    rows = np.loadtxt(out / "results.txt", delimiter=",", ndmin=2)
+    _, counts = np.unique(rows[:, 1], return_counts=True)
+    assert len(np.unique(rows[:, 0])) >= 30 and counts.max() >= 15 and len(counts) <= 3
+    assert "tracks" in capsys.readouterr().out
+
+
+def test_max_frames_and_no_video(tmp_path, capsys) -> None:
+    video = _write_avi(tmp_path / "v.avi")
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--max-frames", "12", "--no-video"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 12 and summary["ended_early"] is False
+    assert not (out / "tracks.mp4").exists()
+    assert main(["track", str(video), "--out", str(out), "--max-frames", "0"]) == 2
+    assert "--max-frames" in _one_line_error(capsys)
+
+
+def test_unknown_detector_and_predictor_are_one_line_errors(tmp_path, capsys) -> None:
+    video = _write_avi(tmp_path / "v.avi")
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--detector", "yolo"]) == 2
+    assert "yolo" in _one_line_error(capsys)
+    assert main(["track", str(video), "--out", str(out), "--predictor", "psychic"]) == 2
+    assert "psychic" in _one_line_error(capsys)
+    assert not out.exists()

@@ -1,0 +1,225 @@
+"""The video pipeline: frame loop, early ends (Ctrl-C, a failing source) and whole runs."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+from mvtrack.config import RunSettings
+from mvtrack.pipeline import run_frames, track_to_folder
+from mvtrack.types import Detections, TrackFrame
+
+
+def squares_video(
+    n_frames: int = 60, size: tuple[int, int] = (160, 120), noise: float = 2.0, seed: int = 0
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """Two 10×8 bright boxes moving across a textured grey background, and their centres.
+
+    Box A (bright) moves right at 2 px/frame along y = 40, box B (dark) left at 1.5 px/frame
+    along y = 85.
+    Both appear at frame 15, after the disturbance map's background has settled on the empty
+    road (boxes sliding in over the border give a biased centroid while partly visible).
+    Returns the frames and the true centres (n_frames, 2, 2).
+    """
+    rng = np.random.default_rng(seed)
+    w, h = size
+    base = np.full((h, w, 3), 90, np.uint8)
+    base[::8, :, :] = 100  # faint texture
+    frames, centres = [], np.zeros((n_frames, 2, 2))
+    for k in range(n_frames):
+        img = base.astype(np.float64)
+        for j, (x, y, color) in enumerate(
+            [(2.0 * k - 10, 40.0, (40, 220, 230)), (w + 5 - 1.5 * k, 85.0, (30, 30, 30))]
+        ):
+            centres[k, j] = (x, y)
+            if k < 15:
+                continue
+            x0, y0 = round(x - 5), round(y - 4)
+            img[y0 : y0 + 8, x0 : x0 + 10] = color
+        img += rng.normal(0, noise, img.shape)
+        frames.append(np.clip(img, 0, 255).astype(np.uint8))
+    return frames, centres
+
+
+class CountingTracker:
+    """A stand-in tracker: every detection is its own track (ids 1..M), for loop tests."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[int, int, bool]] = []
+
+    def step(self, dets: Detections, rescue=None) -> TrackFrame:
+        self.calls.append((dets.frame, len(dets), rescue is not None))
+        m = len(dets)
+        ids = np.arange(1, m + 1, dtype=np.int64)
+        return TrackFrame(dets.frame, ids, np.ones(m, np.int64), np.arange(m), dets.xy,
+                          dets.xy, dets.xy, dets.wh, np.zeros((m, 2)))
+
+
+def one_blob_detector(frame: np.ndarray) -> Detections:
+    """One detection at the brightest pixel (the frame index is set by the pipeline)."""
+    y, x = np.unravel_index(int(frame[..., 0].argmax()), frame.shape[:2])
+    return Detections(-1, [[float(x), float(y)]], [[4.0, 4.0]])
+
+
+def _frames(n: int, fail_at: int | None = None, exc: BaseException | None = None):
+    for k in range(n):
+        if fail_at is not None and k == fail_at:
+            raise exc  # type: ignore[misc]
+        img = np.zeros((20, 30, 3), np.uint8)
+        img[5, k % 30, 0] = 255
+        yield img
+
+
+def test_run_frames_numbers_frames_and_counts_detections() -> None:
+    tracker = CountingTracker()
+    res = run_frames(_frames(7), one_blob_detector, tracker, progress=False)
+    assert res.n_frames == 7 and res.n_detections == 7 and not res.ended_early
+    assert [c[0] for c in tracker.calls] == list(range(7))
+    assert [t.frame for t in res.tracks] == list(range(7))
+    np.testing.assert_allclose([t.measured_xy[0, 0] for t in res.tracks], np.arange(7))
+
+
+def test_ctrl_c_mid_way_keeps_the_frames_so_far() -> None:
+    res = run_frames(_frames(20, fail_at=5, exc=KeyboardInterrupt()), one_blob_detector,
+                     CountingTracker(), progress=False)
+    assert res.interrupted and res.ended_early and res.error is None
+    assert res.n_frames == 5 and len(res.tracks) == 5
+
+
+def test_ctrl_c_inside_the_tracker_is_also_clean() -> None:
+    class Boom(CountingTracker):
+        def step(self, dets, rescue=None):
+            if dets.frame == 3:
+                raise KeyboardInterrupt
+            return super().step(dets, rescue)
+
+    res = run_frames(_frames(10), one_blob_detector, Boom(), progress=False)
+    assert res.interrupted and res.n_frames == 3
+
+
+def test_source_failing_mid_way_is_reported_not_raised() -> None:
+    res = run_frames(_frames(10, fail_at=4, exc=OSError("stream dropped")), one_blob_detector,
+                     CountingTracker(), progress=False)
+    assert res.error == "stream dropped" and res.ended_early and not res.interrupted
+    assert res.n_frames == 4
+    with pytest.raises(OSError, match="dropped"):
+        run_frames(_frames(10, fail_at=0, exc=OSError("dropped")), one_blob_detector,
+                   CountingTracker(), progress=False)
+
+
+def test_max_frames_and_rescuer_are_honoured() -> None:
+    seen: list[tuple[str, int]] = []
+
+    class Rescuer:
+        def callback(self, image, dets):
+            assert dets.frame == int(image[5].argmax() // 3)
+            seen.append(("callback", int(image[5].argmax() // 3)))
+            return lambda uids, xy, wh: (np.zeros(len(uids), bool), xy)
+
+        def observe(self, image, dets, tracks):
+            seen.append(("observe", dets.frame))
+
+    tracker = CountingTracker()
+    res = run_frames(_frames(50), one_blob_detector, tracker, rescuer=Rescuer(), max_frames=4,
+                     progress=False)
+    assert res.n_frames == 4 and not res.ended_early
+    assert all(c[2] for c in tracker.calls)
+    assert seen == [("callback", 0), ("observe", 0), ("callback", 1), ("observe", 1),
+                    ("callback", 2), ("observe", 2), ("callback", 3), ("observe", 3)]
+    with pytest.raises(ValueError, match="max_frames"):
+        run_frames(_frames(3), one_blob_detector, tracker, max_frames=0)
+
+
+# ------------------------------------------------------------------ whole runs, real parts
+
+
+def _settings(**kw) -> RunSettings:
+    tracker = {"preset": "default"}
+    return RunSettings(tracker=tracker, templates=False, **kw)
+
+
+def _match(log, centres: np.ndarray) -> dict[int, np.ndarray]:
+    """For each true box j, the track id nearest to it (≤ 6 px) per frame, −1 if none."""
+    out = {j: np.full(centres.shape[0], -1) for j in range(centres.shape[1])}
+    for tf in log:
+        for j in range(centres.shape[1]):
+            if len(tf) == 0:
+                continue
+            d = np.hypot(*(tf.filtered_xy - centres[tf.frame, j]).T)
+            i = int(d.argmin())
+            if d[i] <= 6.0:
+                out[j][tf.frame] = int(tf.track_id[i])
+    return out
+
+
+def test_rendered_boxes_give_one_track_each(tmp_path) -> None:
+    frames, centres = squares_video(70)
+    run = track_to_folder(frames, fps=30.0, size=(160, 120), settings=_settings(),
+                          out=tmp_path, progress=False, source="squares")
+    per_box = _match(run.log, centres)
+    for j, ids in per_box.items():
+        held = ids[20:]  # both boxes fully inside and confirmed
+        assert (held > 0).mean() > 0.95, (j, ids)
+        values, counts = np.unique(held[held > 0], return_counts=True)
+        assert len(values) == 1, (j, values, counts)  # one identity over the whole run
+    assert per_box[0][40] != per_box[1][40]
+    assert run.summary["tracks"] >= 2 and run.summary["frames"] == 70
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["results.txt", "summary.json", "tracks.mp4", "trajectories.png"]
+
+
+def test_output_files_are_complete(tmp_path) -> None:
+    import cv2
+
+    from mvtrack.io.mot import read_mot
+
+    frames, _ = squares_video(40)
+    run = track_to_folder(frames, fps=30.0, size=(160, 120), settings=_settings(),
+                          out=tmp_path, progress=False)
+    table = read_mot(tmp_path / "results.txt", "results")
+    assert len(table) == run.log.to_mot(include_coasting=False).shape[0] > 0
+    assert table.frame.max() <= 39
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["frames"] == 40 and summary["ended_early"] is False
+    assert summary["tracks"] == len(np.unique(table.id))
+    assert set(summary["states"]) >= {"confirmed", "coasting", "stopped"}
+    assert summary["settings"]["detector"] == "disturbance-map"
+    cap = cv2.VideoCapture(str(tmp_path / "tracks.mp4"))
+    n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    ok, first = cap.read()
+    cap.release()
+    assert ok and first.shape == (120, 160, 3) and n == 40
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_ctrl_c_still_writes_results_of_the_frames_so_far(tmp_path) -> None:
+    from mvtrack.io.mot import read_mot
+
+    frames, _ = squares_video(60)
+
+    def interrupted() -> Iterator[np.ndarray]:
+        for k, f in enumerate(frames):
+            if k == 30:
+                raise KeyboardInterrupt
+            yield f
+
+    run = track_to_folder(interrupted(), fps=30.0, size=(160, 120), settings=_settings(),
+                          out=tmp_path, progress=False)
+    assert run.result.interrupted and run.summary["ended_early"] is True
+    assert run.summary["frames"] == 30
+    table = read_mot(tmp_path / "results.txt", "results")
+    assert len(table) > 0 and table.frame.max() == 29
+    assert (tmp_path / "tracks.mp4").stat().st_size > 0
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_no_video_skips_the_mp4(tmp_path) -> None:
+    frames, _ = squares_video(20)
+    track_to_folder(frames, fps=30.0, size=(160, 120), settings=_settings(video=False),
+                    out=tmp_path, progress=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "results.txt", "summary.json", "trajectories.png"
+    ]
