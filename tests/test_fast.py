@@ -170,3 +170,38 @@ def test_batched_constant_input_many_frames_stays_finite() -> None:
     np.testing.assert_allclose(pred, pos, rtol=1e-9, atol=1e-7)
     assert np.all(p[[0, 3, 5]].sum(axis=0) <= 3000.0 * (1 + 1e-12))
     assert np.linalg.eigvalsh(fast.unpack(p.T, 3)).min() > 0
+
+
+@pytest.mark.parametrize("kind", ["cv", "ca"])
+def test_select_update_equals_generic_kalman_for_coupled_models(kind, chunk) -> None:
+    from mvtrack.filters.models import coupled
+
+    model = coupled(kind, 1.0, 0.3, 1.7)
+    R = np.array([[1.7, 0.4], [0.4, 2.2]])  # a correlated R exercises the 2×2 inverse
+    rng = np.random.default_rng(8)
+    B, n = 17, model.n
+    x = rng.normal(size=(B, n))
+    P = _spd(rng, B, n)
+    xc, pc = x.T.copy(), fast.pack(P).T.copy()
+    for _ in range(10):
+        x, P = kalman.predict(x, P, model.F, model.Q)
+        xc, pc = fast.kf_axis_predict(xc, pc, model.F, model.Q)
+        z = rng.normal(size=(B, 2)) * 4
+        ok = rng.random(B) > 0.3
+        z[rng.random(B) < 0.15, 1] = np.nan
+        x, P = kalman.update(x, P, z, model.H, R, ok)
+        xc, pc = fast.kf_select_update(xc, pc, z.T.copy(), R, ok)
+        np.testing.assert_allclose(xc.T, x, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(fast.unpack(pc.T, n), P, rtol=1e-10, atol=1e-12)
+
+
+def test_select_update_with_one_component_equals_axis_update() -> None:
+    rng = np.random.default_rng(9)
+    x = rng.normal(size=(3, 5))
+    p = fast.pack(_spd(rng, 5, 3)).T.copy()
+    z = rng.normal(size=5)
+    ok = np.array([True, False, True, True, False])
+    xa, pa = fast.kf_axis_update(x, p, z, 2.0, ok)
+    xb, pb = fast.kf_select_update(x, p, z[None], np.array([[2.0]]), ok)
+    np.testing.assert_allclose(xa, xb, rtol=1e-13)
+    np.testing.assert_allclose(pa, pb, rtol=1e-13)

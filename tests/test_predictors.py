@@ -110,8 +110,10 @@ def test_coupled_equals_generic_kalman() -> None:
     for t in range(1, 20):
         s = p.update(p.predict(s), z[t], np.ones(4, bool))
         x, P = kalman.update(*kalman.predict(x, P, model.F, model.Q), z[t], model.H, model.R)
-    np.testing.assert_allclose(s.x, x, rtol=1e-12)
-    np.testing.assert_allclose(p.position_cov(s), P[:, :2, :2], rtol=1e-12)
+    np.testing.assert_allclose(s.x, x, rtol=1e-10)
+    np.testing.assert_allclose(p.covariance(s), P, rtol=1e-10)
+    np.testing.assert_allclose(p.position_cov(s), P[:, :2, :2], rtol=1e-10)
+    np.testing.assert_allclose(p.innovation_cov(s), P[:, :2, :2] + 1.5 * np.eye(2), rtol=1e-10)
 
 
 def test_rls_predictor_equals_rls_module_after_warmup() -> None:

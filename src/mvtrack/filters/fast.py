@@ -31,6 +31,7 @@ __all__ = [
     "CHUNK",
     "kf_axis_predict",
     "kf_axis_update",
+    "kf_select_update",
     "pack",
     "packed_index",
     "rls_step",
@@ -38,7 +39,7 @@ __all__ = [
 ]
 
 #: filters per chunk (keeps about 20 temporaries of CHUNK doubles in the L2/L3 cache)
-CHUNK = 32768
+CHUNK = 16384
 
 
 def packed_index(n: int) -> np.ndarray:
@@ -88,11 +89,19 @@ def _finite(a: np.ndarray) -> BoolArray:
 def _lincomb(terms: list[tuple[float, FloatArray]], out: FloatArray, tmp: FloatArray) -> None:
     """``out[:] = Σ c·a`` over ``terms`` (zero coefficients already dropped; none empty)."""
     c0, a0 = terms[0]
-    if c0 == 1.0:
+    rest = terms[1:]
+    if c0 == 1.0 and rest and rest[0][0] == 1.0:
+        np.add(a0, rest[0][1], out=out)
+        rest = rest[1:]
+    elif c0 == 1.0 and rest:
+        np.multiply(rest[0][1], rest[0][0], out=out)
+        out += a0
+        rest = rest[1:]
+    elif c0 == 1.0:
         np.copyto(out, a0)
     else:
         np.multiply(a0, c0, out=out)
-    for c, a in terms[1:]:
+    for c, a in rest:
         if c == 1.0:
             out += a
         else:
@@ -186,26 +195,113 @@ def kf_axis_update(
 
     def kernel(sc: list[FloatArray], xi: FloatArray, pi: FloatArray, zc: FloatArray,
                mc: BoolArray, xo: FloatArray, po: FloatArray) -> None:
-        np.copyto(xo, xi)
-        np.copyto(po, pi)
-        g, nu, tmp, k = sc[0], sc[1], sc[2], sc[3:]
-        np.add(po[idx[0, 0]], r, out=g)  # eq. (3): S = P₀₀ + r
+        g, nu, k = sc[0], sc[1], sc[2:]
+        np.add(pi[idx[0, 0]], r, out=g)  # eq. (3): S = P₀₀ + r
         np.divide(1.0, g, out=g)
-        np.copyto(g, 0.0, where=mc)  # zero gain where there is no measurement
-        np.subtract(zc, xo[0], out=nu)  # innovation z − H x̄
-        np.copyto(nu, 0.0, where=mc)
+        if any_miss:
+            np.copyto(g, 0.0, where=mc)  # zero gain where there is no measurement
+        np.subtract(zc, xi[0], out=nu)  # innovation z − H x̄
+        if any_miss:
+            np.copyto(nu, 0.0, where=mc)
         nu *= g
         for i in range(n):  # eq. (3): K_i = P_0i / S
-            np.multiply(po[idx[0, i]], g, out=k[i])
-        for i in range(n):  # eq. (4)
-            np.multiply(po[idx[0, i]], nu, out=tmp)
-            xo[i] += tmp
-        for i in range(n - 1, -1, -1):  # eq. (5): P_ij −= K_i P_0j (P_0j updated last)
-            for j in range(n - 1, i - 1, -1):
-                np.multiply(k[i], po[idx[0, j]], out=tmp)
-                po[idx[i, j]] -= tmp
+            np.multiply(pi[idx[0, i]], g, out=k[i])
+        for i in range(n):  # eq. (4): x_i + P_0i ν / S
+            np.multiply(pi[idx[0, i]], nu, out=xo[i])
+            xo[i] += xi[i]
+        for i in range(n):  # eq. (5): P_ij − K_i P_0j
+            for j in range(i, n):
+                out = po[idx[i, j]]
+                np.multiply(k[i], pi[idx[0, j]], out=out)
+                np.subtract(pi[idx[i, j]], out, out=out)
 
-    _chunked(kernel, [x, p, z, miss, x_out, p_out], B, 3 + n)
+    any_miss = bool(miss.any())
+    _chunked(kernel, [x, p, z, miss, x_out, p_out], B, 2 + n)
+    return x_out, p_out
+
+
+def kf_select_update(
+    x: FloatArray, p: FloatArray, z: FloatArray, R: FloatArray, ok: BoolArray
+) -> tuple[FloatArray, FloatArray]:
+    """Eqs. (3)–(5) of paper 1 for a measurement of the first ``m`` ≤ 2 state components.
+
+    ``H = [I_m 0]`` (the coupled model: ``z = [x, y]``), so ``S = P[:m, :m] + R`` is at most
+    2×2 and is inverted in closed form.
+
+    .. math::
+        K = P H^T S^{-1} \\quad (3) \\qquad \\hat x = \\bar x + K (z - H \\bar x) \\quad (4)
+        \\qquad P = \\bar P - K H \\bar P \\quad (5)
+
+    Parameters
+    ----------
+    x : ndarray (n, B)
+    p : ndarray (n(n+1)/2, B)
+    z : ndarray (m, B)
+    R : ndarray (m, m)
+    ok : ndarray (B,) of bool
+        Filters that got a measurement (rows of z with NaN count as missing).
+    """
+    n, B = x.shape
+    m = z.shape[0]
+    if m not in (1, 2):
+        raise ValueError(f"kf_select_update handles 1 or 2 measured components, got {m}")
+    idx = packed_index(n)
+    x_out = np.empty_like(x)
+    p_out = np.empty_like(p)
+    miss = ~ok
+    for a in range(m):
+        miss = miss | ~_finite(z[a])
+
+    def kernel(sc: list[FloatArray], xi: FloatArray, pin: FloatArray, zc: FloatArray,
+               mc: BoolArray, xo: FloatArray, po: FloatArray) -> None:
+        np.copyto(xo, xi)
+        np.copyto(po, pin)
+        tmp, det = sc[0], sc[1]
+        inv = sc[2:5]  # S⁻¹ entries 00, 01, 11
+        nu = sc[5:7]
+        HP = [[sc[7 + a * n + j] for j in range(n)] for a in range(m)]
+        K = [[sc[7 + 2 * n + i * m + a] for a in range(m)] for i in range(n)]
+        for a in range(m):  # rows of P̄ the update subtracts from (H P̄), before changing P
+            for j in range(n):
+                np.copyto(HP[a][j], po[idx[a, j]])
+        if m == 1:
+            np.add(po[idx[0, 0]], R[0, 0], out=inv[0])
+            np.divide(1.0, inv[0], out=inv[0])
+            np.copyto(inv[0], 0.0, where=mc)
+        else:
+            s00 = po[idx[0, 0]] + R[0, 0]
+            s01 = po[idx[0, 1]] + R[0, 1]
+            s11 = po[idx[1, 1]] + R[1, 1]
+            np.multiply(s00, s11, out=det)
+            np.multiply(s01, s01, out=tmp)
+            det -= tmp
+            np.divide(1.0, det, out=det)
+            np.copyto(det, 0.0, where=mc)  # zero gain where there is no measurement
+            np.multiply(s11, det, out=inv[0])
+            np.multiply(s01, det, out=inv[1])
+            np.negative(inv[1], out=inv[1])
+            np.multiply(s00, det, out=inv[2])
+        sinv = [[inv[0]]] if m == 1 else [[inv[0], inv[1]], [inv[1], inv[2]]]
+        for i in range(n):  # eq. (3): K = P̄ Hᵀ S⁻¹, P̄Hᵀ = (HP̄)ᵀ
+            for a in range(m):
+                np.multiply(HP[0][i], sinv[0][a], out=K[i][a])
+                for b in range(1, m):
+                    np.multiply(HP[b][i], sinv[b][a], out=tmp)
+                    K[i][a] += tmp
+        for a in range(m):  # innovation
+            np.subtract(zc[a], xo[a], out=nu[a])
+            np.copyto(nu[a], 0.0, where=mc)
+        for i in range(n):  # eq. (4)
+            for a in range(m):
+                np.multiply(K[i][a], nu[a], out=tmp)
+                xo[i] += tmp
+        for i in range(n):  # eq. (5): P −= K (H P̄)
+            for j in range(i, n):
+                for a in range(m):
+                    np.multiply(K[i][a], HP[a][j], out=tmp)
+                    po[idx[i, j]] -= tmp
+
+    _chunked(kernel, [x, p, z, miss, x_out, p_out], B, 7 + 2 * n + n * m)
     return x_out, p_out
 
 
@@ -263,34 +359,34 @@ def rls_step(
     def kernel(sc: list[FloatArray], wi: FloatArray, pin: FloatArray, u: FloatArray,
                yc: FloatArray, mc: BoolArray, fc: FloatArray, wo: FloatArray, po: FloatArray,
                to: FloatArray, al: FloatArray) -> None:
-        np.copyto(wo, wi)
-        np.copyto(po, pin)
         d, yh, tmp, tr, k_i = sc[0], sc[1], sc[2], sc[3], sc[4]
         pi = sc[5 : 5 + M]
         for i in range(M):  # π = P_{n−1} ỹ_n
-            np.multiply(po[idx[i, 0]], u[0], out=pi[i])
+            np.multiply(pin[idx[i, 0]], u[0], out=pi[i])
             for j in range(1, M):
-                np.multiply(po[idx[i, j]], u[j], out=tmp)
+                np.multiply(pin[idx[i, j]], u[j], out=tmp)
                 pi[i] += tmp
         np.multiply(u[0], pi[0], out=d)  # ỹᵀπ
-        np.multiply(wo[0], u[0], out=yh)  # ŵ_{n−1}ᵀ ỹ_n
+        np.multiply(wi[0], u[0], out=yh)  # ŵ_{n−1}ᵀ ỹ_n
         for i in range(1, M):
             np.multiply(u[i], pi[i], out=tmp)
             d += tmp
-            np.multiply(wo[i], u[i], out=tmp)
+            np.multiply(wi[i], u[i], out=tmp)
             yh += tmp
         d += 1.0
         np.divide(1.0, d, out=d)  # 1 / (1 + ỹᵀπ)
-        np.copyto(d, 0.0, where=mc)  # zero gain without an observation
         np.subtract(yc, yh, out=al)  # eq. (13), α = y − ŵᵀỹ
-        np.copyto(al, 0.0, where=mc)
+        if any_miss:
+            np.copyto(d, 0.0, where=mc)  # zero gain without an observation
+            np.copyto(al, 0.0, where=mc)
         for i in range(M):
             np.multiply(pi[i], d, out=k_i)  # eq. (12), k_i = π_i / (1 + ỹᵀπ)
-            np.multiply(k_i, al, out=tmp)
-            wo[i] += tmp  # eq. (14)
-            for j in range(i, M):
-                np.multiply(k_i, pi[j], out=tmp)
-                po[idx[i, j]] -= tmp  # eq. (15) bracket: P − k ỹᵀ P = P − k πᵀ
+            np.multiply(k_i, al, out=wo[i])
+            wo[i] += wi[i]  # eq. (14)
+            for j in range(i, M):  # eq. (15) bracket: P − k ỹᵀ P = P − k πᵀ
+                out = po[idx[i, j]]
+                np.multiply(k_i, pi[j], out=out)
+                np.subtract(pin[idx[i, j]], out, out=out)
         np.copyto(tr, po[diag[0]])
         for i in range(1, M):
             tr += po[diag[i]]
@@ -298,15 +394,20 @@ def rls_step(
         if lam != 1.0:
             tr *= inv_lam
             np.less_equal(tr, trace_max, out=tmp, casting="unsafe")
-            np.copyto(tmp, 0.0, where=mc)
+            if any_miss:
+                np.copyto(tmp, 0.0, where=mc)
             tmp *= inv_lam - 1.0
             tmp += 1.0
             for row in po:
                 row *= tmp
-        bad = ~_finite(tr)
-        for i in range(M):
-            bad |= po[diag[i]] <= 0.0
-        if bad.any():  # safety net: covariance reset to c I (see mvtrack.filters.rls)
+        # safety net: covariance reset to c I (see mvtrack.filters.rls)
+        np.copyto(tmp, po[diag[0]])
+        for i in range(1, M):
+            np.minimum(tmp, po[diag[i]], out=tmp)
+        if not (bool(np.all(tmp > 0.0)) and bool(np.all(_finite(tr)))):
+            bad = ~_finite(tr)
+            for i in range(M):
+                bad |= ~(po[diag[i]] > 0.0)
             for i in range(M):
                 for j in range(i, M):
                     po[idx[i, j], bad] = c if i == j else 0.0
@@ -315,5 +416,6 @@ def rls_step(
         for i in range(1, M):
             np.copyto(to[i], u[i - 1])
 
+    any_miss = bool(miss.any())
     _chunked(kernel, [w, p, taps, y_in, miss, fill_in, w_out, p_out, taps_out, alpha], B, 5 + M)
     return w_out, p_out, taps_out, alpha

@@ -32,7 +32,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from mvtrack.filters import fast, kalman, rls
+from mvtrack.filters import fast, rls
 from mvtrack.filters.base import BoolArray, FloatArray, Predictor
 from mvtrack.filters.models import (
     LinearModel,
@@ -120,7 +120,16 @@ class AxisKalmanState:
 
 @dataclass(frozen=True)
 class KalmanState:
-    """Coupled Kalman state of ``N`` tracks: ``x`` (N, n), ``P`` (N, n, n)."""
+    """Coupled Kalman state of ``N`` tracks.
+
+    Attributes
+    ----------
+    x : ndarray (N, n)
+        States ``[x, y, vx, vy(, ax, ay)]``.
+    P : ndarray (N, n(n+1)/2)
+        Covariances, packed upper triangle (:meth:`CoupledKalmanPredictor.covariance` gives
+        the full matrices). Stored component-first in memory, like :class:`AxisKalmanState`.
+    """
 
     x: FloatArray
     P: FloatArray
@@ -277,27 +286,37 @@ class CoupledKalmanPredictor:
         self.r = float(r)
         diag = [self.r, self.r, self.vel_var, self.vel_var, self.acc_var, self.acc_var]
         self._P0 = np.diag(diag[: self.model.n])
+        self._pos_idx = fast.packed_index(self.model.n)[:2, :2]
 
     def init(self, xy: FloatArray) -> KalmanState:
         """State of ``K`` new tracks at ``xy`` (K, 2), zero velocity."""
         xy = _check_xy("xy", xy)
         if not np.all(np.isfinite(xy)):
             raise ValueError("xy holds NaN or infinite values")
-        K = xy.shape[0]
-        x = np.zeros((K, self.model.n))
-        x[:, :2] = xy
-        return KalmanState(x=x, P=np.broadcast_to(self._P0, (K, *self._P0.shape)).copy())
+        K, n = xy.shape[0], self.model.n
+        x = np.zeros((n, K))
+        x[:2] = xy.T
+        P = np.empty((n * (n + 1) // 2, K))
+        P[:] = fast.pack(self._P0)[:, None]
+        return KalmanState(x=x.T, P=P.T)
 
     def predict(self, state: KalmanState) -> KalmanState:
         """Time update, eqs. (6)–(7) of paper 1."""
-        x, P = kalman.predict(state.x, state.P, self.model.F, self.model.Q)
-        return KalmanState(x=x, P=P)
+        x, P = fast.kf_axis_predict(np.ascontiguousarray(state.x.T),
+                                    np.ascontiguousarray(state.P.T), self.model.F, self.model.Q)
+        return KalmanState(x=x.T, P=P.T)
 
     def update(self, state: KalmanState, z: FloatArray, mask: BoolArray) -> KalmanState:
         """Measurement update, eqs. (3)–(5); rows with mask False or NaN keep the prediction."""
         z, ok = _check_z_mask(z, mask, state.x.shape[0])
-        x, P = kalman.update(state.x, state.P, z, self.model.H, self.model.R, ok)
-        return KalmanState(x=x, P=P)
+        x, P = fast.kf_select_update(np.ascontiguousarray(state.x.T),
+                                     np.ascontiguousarray(state.P.T),
+                                     np.ascontiguousarray(z.T), self.model.R, ok)
+        return KalmanState(x=x.T, P=P.T)
+
+    def covariance(self, state: KalmanState) -> FloatArray:
+        """Full covariances (N, n, n)."""
+        return fast.unpack(state.P, self.model.n)
 
     def position(self, state: KalmanState) -> FloatArray:
         """Position estimate (N, 2)."""
@@ -309,11 +328,11 @@ class CoupledKalmanPredictor:
 
     def position_cov(self, state: KalmanState) -> FloatArray:
         """Full 2×2 position covariance (N, 2, 2)."""
-        return state.P[:, :2, :2].copy()
+        return state.P[:, self._pos_idx]
 
     def innovation_cov(self, state: KalmanState) -> FloatArray:
         """``S = P_pos + R`` (N, 2, 2)."""
-        return state.P[:, :2, :2] + self.model.R
+        return state.P[:, self._pos_idx] + self.model.R
 
 
 @dataclass(frozen=True)
