@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mvtrack._batch import batch_size, concat, take
 from mvtrack.filters import kalman, rls
@@ -176,3 +178,40 @@ def test_bad_measurement_shapes_raise(name: str) -> None:
         p.update(s, np.zeros((2, 2)), np.ones(2))
     with pytest.raises(ValueError, match="xy"):
         p.init(np.zeros((2, 3)))
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    name=st.sampled_from(sorted(PREDICTORS)),
+    N=st.integers(0, 7),
+    steps=st.integers(1, 15),
+    seed=st.integers(0, 2**31 - 1),
+)
+def test_property_shapes_covariances_and_masks(name, N, steps, seed) -> None:
+    rng = np.random.default_rng(seed)
+    p = make_predictor(name)
+    s = p.init(rng.uniform(0, 500, size=(N, 2)))
+    for _ in range(steps):
+        s = p.predict(s)
+        before = p.position(s)
+        for cov in (p.position_cov(s), p.innovation_cov(s)):
+            assert cov.shape == (N, 2, 2)
+            np.testing.assert_allclose(cov, np.swapaxes(cov, 1, 2), rtol=1e-12, atol=1e-12)
+            if N:
+                assert np.linalg.eigvalsh(cov).min() > 0
+        z = before + rng.normal(0, 3, size=(N, 2))
+        z[rng.random(N) < 0.2, rng.integers(0, 2)] = np.nan
+        mask = rng.random(N) > 0.2
+        s = p.update(s, z, mask)
+        after = p.position(s)
+        missing = ~(mask & np.isfinite(z).all(axis=1))
+        np.testing.assert_allclose(after[missing], before[missing], rtol=1e-12, atol=1e-9)
+        assert np.all(np.isfinite(after)) and np.all(np.isfinite(p.velocity(s)))
+        assert batch_size(s) == N
+    # take/concat keep rows intact
+    if N:
+        idx = rng.permutation(N)
+        shuffled = take(s, idx)
+        np.testing.assert_array_equal(p.position(shuffled), p.position(s)[idx])
+        np.testing.assert_array_equal(p.position(p.predict(shuffled)),
+                                      p.position(p.predict(s))[idx])
