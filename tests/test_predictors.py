@@ -215,3 +215,31 @@ def test_property_shapes_covariances_and_masks(name, N, steps, seed) -> None:
         np.testing.assert_array_equal(p.position(shuffled), p.position(s)[idx])
         np.testing.assert_array_equal(p.position(p.predict(shuffled)),
                                       p.position(p.predict(s))[idx])
+
+
+def test_rls_history_parameter_sets_samples_before_the_first() -> None:
+    xy = np.array([[120.0, 80.0]])
+    zeros = RLSPredictor(warmup=0)  # SPEC §1.3 [R]: samples before the first are 0
+    s = zeros.predict(zeros.init(xy))
+    np.testing.assert_array_equal(zeros.position(s), [[0.0, 0.0]])  # ỹ₁ = 0: ŵ stays 0
+    first = RLSPredictor(warmup=0, history="first")
+    s = first.predict(first.init(xy))
+    np.testing.assert_allclose(first.position(s), xy, rtol=1e-4)
+    with pytest.raises(ValueError, match="history"):
+        RLSPredictor(history="ones")
+
+
+def test_rls_error_variance_is_a_floored_running_mean_of_squared_errors() -> None:
+    p = RLSPredictor(r=2.0, vel_var=10.0, beta=0.5, min_var=0.25, warmup=100)
+    s = p.init(np.array([[0.0, 0.0]]))
+    np.testing.assert_allclose(p.innovation_cov(s)[0], 12.0 * np.eye(2))  # r + vel_var
+    s = p.predict(s)  # warm-up prediction: the last position, (0, 0)
+    s = p.update(s, np.array([[4.0, 0.0]]), np.ones(1, bool))
+    # e = 0.5·12 + 0.5·16 = 14 on x; 0.5·12 + 0 = 6 on y
+    np.testing.assert_allclose(np.diagonal(p.innovation_cov(s)[0]), [14.0, 6.0])
+    np.testing.assert_allclose(np.diagonal(p.position_cov(s)[0]), [12.0, 4.0])
+    for _ in range(30):  # perfect predictions drive e to 0; P̄ stops at min_var
+        s = p.predict(s)
+        s = p.update(s, p.position(s), np.ones(1, bool))
+    np.testing.assert_allclose(np.diagonal(p.position_cov(s)[0]), [0.25, 0.25])
+    np.testing.assert_allclose(np.diagonal(p.innovation_cov(s)[0]), [2.25, 2.25])
