@@ -10,7 +10,8 @@ Rows:
   the issue-3 defaults (σ = 2 px, size σ = 1 px, 10 % missed, Poisson(3) clutter), seconds.
 
 OpenCV runs on one thread and BLAS is pinned to one thread before NumPy loads. Each figure is
-the median of ``--repeats`` runs.
+the median of ``--repeats`` runs, as wall-clock time and as CPU time of the process (the
+latter is the fairer figure on a shared, loaded machine).
 
 Usage::
 
@@ -38,13 +39,16 @@ from mvtrack.sim.detections import detections_from_scene  # noqa: E402
 from mvtrack.sim.render import render_frames  # noqa: E402
 
 
-def _median_time(fn: Callable[[], object], repeats: int) -> float:
-    times = []
+def _median_time(fn: Callable[[], object], repeats: int) -> tuple[float, float]:
+    """Median wall-clock and median CPU seconds of ``fn`` (CPU time is less sensitive to
+    other jobs on a shared machine)."""
+    wall, cpu = [], []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+    return statistics.median(wall), statistics.median(cpu)
 
 
 def _render_all(scene: S.Scene, size: tuple[int, int] | None = None) -> None:
@@ -57,8 +61,9 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     cv2.setNumThreads(1)
+    load = os.getloadavg()[0]
     r = args.repeats
-    rows: list[tuple[str, str, str]] = []
+    rows: list[tuple[str, str, str, str]] = []
 
     renders = [
         ("x4 (flat, no noise)", S.x4_nine_vehicles(), None),
@@ -68,26 +73,31 @@ def main() -> None:
         ("crowd N=1000, 1920×1080", S.crowd(1000, frames=30, seed=0), None),
     ]
     for label, scene, size in renders:
-        t = _median_time(lambda scene=scene, size=size: _render_all(scene, size), r)
+        t, c = _median_time(lambda scene=scene, size=size: _render_all(scene, size), r)
         w, h = size or scene.size
-        rows.append((f"render {label}", f"{w}×{h}", f"{scene.n_frames / t:,.0f} frames/s"))
+        rows.append((f"render {label}", f"{w}×{h}", f"{scene.n_frames / t:,.0f} frames/s",
+                     f"{scene.n_frames / c:,.0f} frames/s"))
         print(rows[-1], flush=True)
 
     for n in (1_000, 10_000):
-        t = _median_time(lambda n=n: S.crowd(n, frames=300, seed=0), r)
-        rows.append((f"build crowd N={n:,}, 300 frames", "1920×1080", f"{t:.2f} s"))
+        t, c = _median_time(lambda n=n: S.crowd(n, frames=300, seed=0), r)
+        rows.append((f"build crowd N={n:,}, 300 frames", "1920×1080", f"{t:.2f} s",
+                     f"{c:.2f} s"))
         print(rows[-1], flush=True)
         scene = S.crowd(n, frames=300, seed=0)
-        t = _median_time(lambda scene=scene: detections_from_scene(
+        t, c = _median_time(lambda scene=scene: detections_from_scene(
             scene, np.random.default_rng(0)), r)
-        rows.append((f"detections crowd N={n:,}, 300 frames", "1920×1080", f"{t:.2f} s"))
+        rows.append((f"detections crowd N={n:,}, 300 frames", "1920×1080", f"{t:.2f} s",
+                     f"{c:.2f} s"))
         print(rows[-1], flush=True)
 
     print()
-    print("| what | size | median |")
-    print("|---|---|---|")
-    for what, size, value in rows:
-        print(f"| {what} | {size} | {value} |")
+    print(f"load average before the run: {load:.1f} (1 min), after: {os.getloadavg()[0]:.1f}")
+    print()
+    print("| what | size | median (wall clock) | median (CPU time) |")
+    print("|---|---|---|---|")
+    for what, size, value, cpu in rows:
+        print(f"| {what} | {size} | {value} | {cpu} |")
 
 
 if __name__ == "__main__":
