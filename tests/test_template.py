@@ -33,8 +33,13 @@ def _centre(tl: tuple[int, int]) -> np.ndarray:
     return np.array([tl[0] + (VW - 1) / 2, tl[1] + (VH - 1) / 2])
 
 
+def _bank() -> TemplateBank:
+    """A bank without the travel guard, for tests of the search itself."""
+    return TemplateBank(min_travel=0, min_travel_px=0, min_hits=0)
+
+
 def _bank_with_vehicle(tl=(50, 40), uid: int = 7) -> TemplateBank:
-    bank = TemplateBank(min_travel=0)
+    bank = _bank()
     bank.observe(_frame(tl, seed=1), [uid], [_centre(tl)], [[VW, VH]])
     return bank
 
@@ -73,7 +78,7 @@ def test_rescue_searches_only_inside_the_circular_gate() -> None:
 
 
 def test_only_the_tracks_with_templates_are_searched_and_order_is_kept() -> None:
-    bank = TemplateBank(min_travel=0)
+    bank = _bank()
     a, b = (20, 20), (100, 80)
     img = _frame(a, seed=1)
     img[b[1] : b[1] + VH, b[0] : b[0] + VW] = 255 - _vehicle()[..., None]
@@ -109,7 +114,7 @@ def test_template_is_refreshed_when_the_track_is_detected_again() -> None:
 
 
 def test_flat_or_tiny_boxes_keep_no_template() -> None:
-    bank = TemplateBank(min_travel=0)
+    bank = _bank()
     flat = np.full((H, W, 3), 90, np.uint8)
     bank.observe(flat, [1, 2], [[50, 50], [80, 80]], [[20, 20], [2, 2]])
     assert bank.template(1) is None and bank.template(2) is None
@@ -118,7 +123,7 @@ def test_flat_or_tiny_boxes_keep_no_template() -> None:
 
 
 def test_drop_and_retain_forget_deleted_tracks() -> None:
-    bank = TemplateBank(min_travel=0)
+    bank = _bank()
     img = _frame((50, 40), seed=1)
     bank.observe(img, [3, 1, 2], [_centre((50, 40))] * 3, [[VW, VH]] * 3)
     assert bank.uids.tolist() == [1, 2, 3]
@@ -137,11 +142,11 @@ def test_bind_gives_the_tracker_callback_signature() -> None:
     assert found.tolist() == [True] and xy.shape == (1, 2)
 
 
-def test_only_tracks_that_travelled_a_box_length_are_searched() -> None:
+def test_only_tracks_that_travelled_and_were_seen_often_are_searched() -> None:
     # a track that never moved (clutter, a ghost) would match the static scene for ever
-    bank = TemplateBank()  # min_travel = 1 box length
+    bank = TemplateBank()  # min_travel = 1 box length and ≥ 10 px, min_hits = 5
     still = (50, 40)
-    for k in range(5):
+    for k in range(8):
         bank.observe(_frame(still, seed=k), [7], [_centre(still)], [[VW, VH]])
     assert bank.eligible.tolist() == [False]
     assert not bank.rescue(_frame(still, seed=9), [7], [_centre(still)])[0][0]
@@ -151,6 +156,56 @@ def test_only_tracks_that_travelled_a_box_length_are_searched() -> None:
         bank.observe(_frame((x, 40), seed=x), [7], [_centre((x, 40))], [[VW, VH]])
     assert bank.eligible.tolist() == [True]
     assert bank.rescue(_frame(still, seed=9), [7], [_centre(still)])[0][0]
+    # ... but not after only 4 detections, however far it went
+    bank = TemplateBank()
+    for x in range(20, 51, 10):
+        bank.observe(_frame((x, 40), seed=x), [7], [_centre((x, 40))], [[VW, VH]])
+    assert bank.eligible.tolist() == [False]
+
+
+def test_a_shrinking_detection_keeps_the_last_full_appearance() -> None:
+    tl = (50, 40)
+    bank = _bank()
+    bank.observe(_frame(tl, seed=1), [7], [_centre(tl)], [[VW, VH]])
+    # the blob fades to a fragment (a quarter of the box): the template stays the full box
+    bank.observe(_frame(tl, seed=2), [7], [_centre(tl) + 2], [[VW / 2, VH / 2]])
+    bank.observe(_frame(tl, seed=3), [7], [_centre(tl) + 2], [[VW / 2, VH / 2]])
+    assert bank.template(7).shape == (VH, VW)
+    found, xy, _ = bank.rescue(_frame(tl, seed=4), [7], [_centre(tl)])
+    assert found[0]
+    np.testing.assert_allclose(xy[0], _centre(tl), atol=0.01)
+    # with min_fill = 0 every detection refreshes it
+    bank = TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, min_fill=0)
+    bank.observe(_frame(tl, seed=1), [7], [_centre(tl)], [[VW, VH]])
+    bank.observe(_frame(tl, seed=2), [7], [_centre(tl)], [[VW / 2, VH / 2]])
+    assert bank.template(7).shape == (VH // 2, VW // 2)
+
+
+def test_object_mask_stops_a_template_matching_the_scene_its_object_left() -> None:
+    # a strong edge of the scene inside the box, a small textured object on its dark side
+    rng = np.random.default_rng(0)
+    scene = np.full((80, 80), 50, np.uint8)
+    scene[:, 40:] = 200
+    scene = np.clip(scene + rng.normal(0, 2, scene.shape), 0, 255).astype(np.uint8)
+    with_obj = scene.copy()
+    with_obj[36:46, 28:38] = rng.integers(90, 160, (10, 10))
+    mask = np.zeros_like(scene)
+    mask[36:46, 28:38] = 255
+    empty = np.clip(scene + rng.normal(0, 2, scene.shape), 0, 255).astype(np.uint8)
+    box = ([40.0, 40.5], [30, 30])  # the object's detected box, edge included
+    plain = _bank()
+    plain.observe(with_obj, [1], [box[0]], [box[1]])
+    masked = _bank()
+    masked.min_pixels = 50
+    masked.observe(with_obj, [1], [box[0]], [box[1]], mask=mask)
+    f_plain, _, s_plain = plain.rescue(empty, [1], [box[0]])
+    f_mask, _, s_mask = masked.rescue(empty, [1], [box[0]])
+    assert f_plain[0] and s_plain[0] > 0.8  # the edge alone matches the whole-box template
+    assert not f_mask[0] and s_mask[0] < 0.5  # the object's own pixels do not
+    # and the masked template still finds the object where it is
+    f, xy, _ = masked.rescue(with_obj, [1], [[45.0, 45.0]])
+    assert f[0]
+    np.testing.assert_allclose(xy[0], box[0], atol=0.01)
 
 
 def test_bad_parameters_are_value_errors() -> None:
@@ -160,6 +215,8 @@ def test_bad_parameters_are_value_errors() -> None:
         TemplateBank(gate_radius=-1)
     with pytest.raises(ValueError, match="min_travel"):
         TemplateBank(min_travel=-1)
+    with pytest.raises(ValueError, match="min_fill"):
+        TemplateBank(min_fill=2)
     with pytest.raises(ValueError, match="one row per track"):
         TemplateBank().observe(_frame(None), [1, 2], [[1, 1]], [[1, 1]])
 
@@ -182,8 +239,8 @@ def _run(with_templates: bool, n: int = 200, stop: int = 45, go: int = 185):
     from mvtrack.detection import DisturbanceMap
 
     tracker = tracking.Tracker(tracking.preset("paper1", fps=30))
-    rescuer = TemplateRescuer(TemplateBank(), tracker) if with_templates else None
     dm = DisturbanceMap()
+    rescuer = TemplateRescuer(TemplateBank(), tracker, detector=dm) if with_templates else None
     rows = []
     for _, frame, _ in _stop_and_go(n, stop, go):
         dets = dm(frame)
@@ -237,6 +294,7 @@ def test_without_templates_the_stopped_vehicle_track_ends() -> None:
 def test_gate_radius_follows_a_euclidean_tracker_gate() -> None:
     pytest.importorskip("mvtrack.tracking.tracker")
     from mvtrack import tracking
+
     tracker = tracking.Tracker(tracking.paper1(fps=30, gate_px=10.0))
     assert gate_radius_of(tracker, 20.0) == pytest.approx(10.0)
     assert TemplateRescuer(TemplateBank(), tracker).gate_radius == pytest.approx(10.0)

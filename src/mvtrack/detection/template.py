@@ -50,12 +50,16 @@ def _grey(img: Image) -> Image:
 
 
 class _Template:
-    """One stored appearance: grey patch, the box centre inside it, the observation tick."""
+    """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
+    the observation tick."""
 
-    __slots__ = ("offset", "patch", "tick")
+    __slots__ = ("mask", "offset", "patch", "tick")
 
-    def __init__(self, patch: Image, offset: tuple[float, float], tick: int) -> None:
+    def __init__(
+        self, patch: Image, mask: Image | None, offset: tuple[float, float], tick: int
+    ) -> None:
         self.patch = patch
+        self.mask = mask
         self.offset = offset
         self.tick = tick
 
@@ -77,13 +81,29 @@ class TemplateBank:
     min_std : float, default 2.0
         Templates whose grey-level standard deviation is below this are not kept (a flat
         patch has no defined NCC).
+    min_pixels : int, default 50
+        With object masks (see :meth:`observe`), templates with fewer object pixels than this
+        are not kept: over a few dozen pixels an NCC of 0.8 is reached by chance somewhere in
+        a textured search window (on vtest.avi, 20-pixel templates held dozens of fragments
+        of the lawn and pavement).
     min_travel : float, default 1.0
-        A track is searched only after its detections have moved at least this many box
-        lengths (the larger side of its last box) from where it was first observed. A
-        template of a static place always matches the static scene, so without this guard
-        every spurious track on clutter, and every "ghost" left where a parked object drove
-        off, would be held for ever; a vehicle that *stops* has always driven there first.
-        0 disables the guard.
+        A track is searched only once its last detection lies at least ``min_travel`` box
+        lengths (the larger side of its last box) and at least ``min_travel_px`` pixels from
+        its first, and it has ``min_hits`` detections. A template of a static place always
+        matches the static scene, so without this guard every spurious track on clutter (a
+        flickering fragment, a "ghost" left where a parked object drove off) would be held for
+        ever; a vehicle that *stops* has always driven there first. 0 disables each part.
+    min_travel_px : float, default 10
+        See ``min_travel``.
+    min_hits : int, default 5
+        See ``min_travel``.
+    min_fill : float, default 0.5
+        A detection whose box area is below ``min_fill`` times the track's reference area (a
+        running maximum of its box areas that decays by 1 % per detection, so it follows
+        real changes of size within ~70 detections) does not refresh the template: a vehicle
+        fading into the background, whose blob shrinks over tens of frames, or a person
+        reduced to a fragment, keeps the template of its last full appearance. 0 refreshes
+        on every detection.
 
     Attributes
     ----------
@@ -97,7 +117,11 @@ class TemplateBank:
         gate_radius: float = 20.0,
         min_size: int = 4,
         min_std: float = 2.0,
+        min_pixels: int = 50,
         min_travel: float = 1.0,
+        min_travel_px: float = 10.0,
+        min_hits: int = 5,
+        min_fill: float = 0.5,
     ) -> None:
         if not (-1.0 <= min_score <= 1.0):
             raise ValueError(f"min_score must be an NCC in [-1, 1], got {min_score}")
@@ -109,24 +133,38 @@ class TemplateBank:
             raise ValueError(f"min_std must be ≥ 0, got {min_std}")
         if not (math.isfinite(min_travel) and min_travel >= 0):
             raise ValueError(f"min_travel must be ≥ 0 box lengths, got {min_travel}")
+        if not (math.isfinite(min_travel_px) and min_travel_px >= 0):
+            raise ValueError(f"min_travel_px must be ≥ 0 px, got {min_travel_px}")
+        if min_hits < 0:
+            raise ValueError(f"min_hits must be ≥ 0, got {min_hits}")
+        if not (0.0 <= min_fill <= 1.0):
+            raise ValueError(f"min_fill must be in [0, 1], got {min_fill}")
         self.min_score = float(min_score)
         self.gate_radius = float(gate_radius)
         self.min_size = int(min_size)
         self.min_std = float(min_std)
+        self.min_pixels = int(min_pixels)
         self.min_travel = float(min_travel)
+        self.min_travel_px = float(min_travel_px)
+        self.min_hits = int(min_hits)
+        self.min_fill = float(min_fill)
         self.clear()
 
     # ------------------------------------------------------------------ bookkeeping (arrays)
     def clear(self) -> None:
         """Forget everything."""
         self.uids = np.zeros(0, np.int64)
-        self._box = np.zeros((0, 4))  # x, y, w, h of the last detection
-        self._det_tick = np.zeros(0, np.int64)  # tick of the last detection
+        self._box = np.zeros((0, 4))  # x, y, w, h of the last full-size detection
+        self._det_tick = np.zeros(0, np.int64)  # its tick
+        self._area = np.zeros(0)  # reference box area: running maximum, decaying 1 %/detection
         self._origin = np.zeros((0, 2))  # first observed centre
-        self._travel = np.zeros(0)  # largest distance from the origin so far
+        self._travel = np.zeros(0)  # distance of the last detection from the first
+        self._hits = np.zeros(0, np.int64)  # detections observed
         self._templates: dict[int, _Template] = {}
         self._tick = -1
         self._frame: Image | None = None  # the frame of tick ``_tick``
+        self._mask: Image | None = None  # a copy of its foreground mask, if given
+        self._mask_buf: Image | None = None
 
     def __len__(self) -> int:
         return int(self.uids.size)
@@ -134,7 +172,14 @@ class TemplateBank:
     def __contains__(self, uid: object) -> bool:
         return isinstance(uid, (int, np.integer)) and bool(np.isin(uid, self.uids))
 
-    def observe(self, frame: Image, uids: ArrayLike, xy: ArrayLike, wh: ArrayLike) -> None:
+    def observe(
+        self,
+        frame: Image,
+        uids: ArrayLike,
+        xy: ArrayLike,
+        wh: ArrayLike,
+        mask: Image | None = None,
+    ) -> None:
         """Record this frame's detected boxes of tracks ``uids`` (their new last appearance).
 
         Call once per frame, after the tracker's step, with the tracks that were associated
@@ -150,6 +195,11 @@ class TemplateBank:
             Internal track identities.
         xy, wh : (K, 2)
             Centres and sizes of the detected boxes.
+        mask : (H, W) uint8, optional
+            The frame's foreground mask (non-zero = object; e.g. ``detector.mask``), copied.
+            With it a template holds only the object's own pixels and the search is a masked
+            NCC: the road around the vehicle is left out, so a patch whose object has left
+            cannot match the empty scene. Without it the whole box is the template.
         """
         uids = np.asarray(uids, np.int64).reshape(-1)
         xy = np.asarray(xy, np.float64).reshape(-1, 2)
@@ -161,18 +211,35 @@ class TemplateBank:
             )
         if np.unique(uids).size != uids.size:
             raise ValueError("observe: uids must be distinct")
-        self._tick += 1
-        self._frame = frame
         box = np.hstack([xy, wh])
+        area = wh.prod(axis=1)
         pos = np.searchsorted(self.uids, uids)
         known = pos < self.uids.size
         known[known] = self.uids[pos[known]] == uids[known]
-        # refresh known tracks in place, insert the new ones (kept sorted)
         pk = pos[known]
-        self._box[pk] = box[known]
-        self._det_tick[pk] = self._tick
-        moved = np.hypot(*(xy[known] - self._origin[pk]).T)
-        self._travel[pk] = np.maximum(self._travel[pk], moved)
+        full = area[known] >= self.min_fill * self._area[pk]
+        # a track whose detection just shrank keeps its last full appearance: cut it now from
+        # the kept frame, before that frame is replaced (a loop over these few tracks only)
+        for i in pk[~full & (self._det_tick[pk] == self._tick)].tolist():
+            self._current(i)
+        self._tick += 1
+        self._frame = frame
+        if mask is None:
+            self._mask = None
+        else:
+            if mask.shape != frame.shape[:2]:
+                raise ValueError(f"observe: mask is {mask.shape}, the frame {frame.shape[:2]}")
+            if self._mask_buf is None or self._mask_buf.shape != mask.shape:
+                self._mask_buf = np.empty(mask.shape, np.uint8)
+            np.copyto(self._mask_buf, mask, casting="unsafe")
+            self._mask = self._mask_buf
+        # refresh known tracks in place, insert the new ones (kept sorted)
+        g = pk[full]
+        self._box[g] = box[known][full]
+        self._det_tick[g] = self._tick
+        self._area[pk] = np.maximum(area[known], 0.99 * self._area[pk])
+        self._travel[pk] = np.hypot(*(xy[known] - self._origin[pk]).T)
+        self._hits[pk] += 1
         new = ~known
         if new.any():
             allu = np.concatenate([self.uids, uids[new]])
@@ -184,11 +251,15 @@ class TemplateBank:
             self._det_tick = np.concatenate([self._det_tick, tick])[order]
             self._origin = np.vstack([self._origin, xy[new]])[order]
             self._travel = np.concatenate([self._travel, np.zeros(nn)])[order]
+            self._hits = np.concatenate([self._hits, np.ones(nn, np.int64)])[order]
+            self._area = np.concatenate([self._area, area[new]])[order]
 
     @property
     def eligible(self) -> BoolArray:
-        """Per track in :attr:`uids`: has it travelled ``min_travel`` box lengths?"""
-        return self._travel >= self.min_travel * self._box[:, 2:].max(axis=1, initial=0.0)
+        """Per track in :attr:`uids`: far enough from its first detection, often enough seen."""
+        size = self._box[:, 2:].max(axis=1, initial=0.0)
+        need = np.maximum(self.min_travel * size, self.min_travel_px)
+        return (self._travel >= need) & (self._hits >= self.min_hits)
 
     def retain(self, uids: ArrayLike) -> None:
         """Keep only the tracks in ``uids`` (the live ones); forget deleted tracks."""
@@ -206,10 +277,12 @@ class TemplateBank:
         self._det_tick = self._det_tick[keep]
         self._origin = self._origin[keep]
         self._travel = self._travel[keep]
+        self._hits = self._hits[keep]
+        self._area = self._area[keep]
 
     # ------------------------------------------------------------------------- templates
     def _cut(self, i: int) -> _Template | None:
-        """Grey patch of track row ``i``'s last detected box, from the kept frame."""
+        """Grey patch of track row ``i``'s last full-size detected box, from the kept frame."""
         if self._frame is None:
             return None
         frame = self._frame
@@ -223,9 +296,20 @@ class TemplateBank:
         if x1 - x0 < self.min_size or y1 - y0 < self.min_size:
             return None
         patch = _grey(frame[y0:y1, x0:x1])
-        if float(patch.std()) < self.min_std:
+        mask = None
+        if self._mask is not None:
+            on = self._mask[y0:y1, x0:x1] > 0
+            if int(on.sum()) < self.min_pixels:
+                return None
+            spread = float(patch[on].std())
+            mask = on.astype(np.uint8) * 255
+        else:
+            spread = float(patch.std())
+        if spread < self.min_std:
             return None
-        return _Template(np.ascontiguousarray(patch), (x - x0, y - y0), int(self._det_tick[i]))
+        return _Template(
+            np.ascontiguousarray(patch), mask, (x - x0, y - y0), int(self._det_tick[i])
+        )
 
     def template(self, uid: int) -> Image | None:
         """The grey patch held for ``uid`` (cut now if it is due), or ``None``."""
@@ -288,7 +372,7 @@ class TemplateBank:
         -------
         found : (K,) bool
             NCC ≥ ``min_score`` inside the gate (always False for tracks without a template
-            or that have not travelled ``min_travel`` box lengths).
+            or that are not :attr:`eligible`).
         xy : (K, 2) float64
             Centre of the best match (NaN where not found).
         score : (K,) float64
@@ -325,7 +409,11 @@ class TemplateBank:
             x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
             if x1 - x0 < pw or y1 - y0 < ph:
                 continue  # the window left the image
-            ncc = cv2.matchTemplate(_grey(frame[y0:y1, x0:x1]), t.patch, cv2.TM_CCOEFF_NORMED)
+            window = _grey(frame[y0:y1, x0:x1])
+            if t.mask is None:
+                ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
+            else:  # NCC over the object's pixels only
+                ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED, mask=t.mask)
             # centre of placement (row i, col c) is (x0 + c + ox, y0 + i + oy); circular gate
             cx = x0 + np.arange(ncc.shape[1]) + ox - px
             cy = y0 + np.arange(ncc.shape[0]) + oy - py
@@ -386,13 +474,23 @@ class TemplateRescuer:
     gate_radius : float, optional
         Search radius in px; default: the tracker's gate radius for the Euclidean distance
         (``sqrt(gate)``), else the bank's ``gate_radius``.
+    detector : FrontEnd, optional
+        The detection front end; its foreground ``mask`` after each frame restricts the
+        templates to the objects' own pixels (see :meth:`TemplateBank.observe`). Strongly
+        recommended: without it a template is the whole box, road included, and it can keep
+        matching the empty road after a pedestrian or vehicle has left.
     """
 
     def __init__(
-        self, bank: TemplateBank, tracker: Any = None, gate_radius: float | None = None
+        self,
+        bank: TemplateBank,
+        tracker: Any = None,
+        gate_radius: float | None = None,
+        detector: Any = None,
     ) -> None:
         self.bank = bank
         self.tracker = tracker
+        self.detector = detector
         self._radius = gate_radius
 
     def attach(self, tracker: Any) -> None:
@@ -436,4 +534,5 @@ class TemplateRescuer:
         else:
             uids = d = np.zeros(0, np.int64)
         self.bank.retain(t_uid)
-        self.bank.observe(frame, uids, dets.xy[d], dets.wh[d])
+        mask = getattr(self.detector, "mask", None) if self.detector is not None else None
+        self.bank.observe(frame, uids, dets.xy[d], dets.wh[d], mask)
