@@ -153,6 +153,12 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
         "rls_mse_curve": mse_rls.tolist(),
         "lambda_sweep": sweep,
         "noise_variance": NOISE_VAR,
+        "definitions": {
+            "error": "one-step prediction error: H x̄_k − p_k (KF), ŵ_{k−1}ᵀ ỹ_k − p_k (RLS)",
+            "mse_curve": "ensemble mean over runs of the squared error, per k = 0…359",
+            "mse_windows": "mean of the curve over each window [a, b) of k, in order",
+            "mse": "mean of the curve over k = 1…359",
+        },
         "checks": checks,
         "paper": PAPER,
         "setup": {"dt": DT, "samples": N_SAMPLES, "kf_q": KF_Q, "kf_R": NOISE_VAR,
