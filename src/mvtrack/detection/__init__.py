@@ -4,6 +4,7 @@ from mvtrack.detection.background import MOG2, DisturbanceMap, FrameDifference
 from mvtrack.detection.base import FrontEnd
 from mvtrack.detection.blobs import BlobExtractor, blobs_from_mask
 from mvtrack.detection.frontends import DETECTORS, make_detector
+from mvtrack.detection.template import TemplateBank, TemplateRescuer
 
 __all__ = [
     "DETECTORS",
@@ -12,6 +13,8 @@ __all__ = [
     "DisturbanceMap",
     "FrameDifference",
     "FrontEnd",
+    "TemplateBank",
+    "TemplateRescuer",
     "blobs_from_mask",
     "make_detector",
 ]
