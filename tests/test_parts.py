@@ -13,6 +13,7 @@ from mvtrack.detection.parts import (
     circular_kmeans2,
     feature_distance,
     match_parts,
+    moving_box,
     moving_region,
     occlusion_degree,
     region_features,
@@ -93,9 +94,20 @@ def test_moving_region_fills_the_interior_of_a_moving_box() -> None:
     a[20:40, 10:30] = 200
     b[20:40, 14:34] = 200  # moved 4 px right; only the leading/trailing strips differ
     b[5, 70] = 0  # one-pixel noise
-    region = moving_region(a, b, threshold=20, open_size=3, close_size=21)
+    region = moving_region(a, b, threshold=20, close_size=21)
     assert region[30, 20] and region[30, 12] and region[30, 32]
     assert not region[5, 70] and not region[50, 5]
+
+
+def test_walker_is_picked_up_in_the_door_zone(scene) -> None:
+    zone = DetectionZone(*scene.door)
+    box = moving_box(scene.frames[0], scene.frames[1], zone)
+    true = scene.boxes[:2]  # (2 frames, 3 parts, 4)
+    want = [true[..., 0].min(), true[..., 1].min(), true[..., 2].max(), true[..., 3].max()]
+    np.testing.assert_allclose(box, want, atol=3.0)
+    # far from the door nothing is picked up, though the walker moves there later
+    far = DetectionZone(200, 0, 320, 60)
+    assert moving_box(scene.frames[0], scene.frames[1], far) is None
 
 
 def test_feature_distance_and_alpha_by_hand() -> None:

@@ -322,3 +322,14 @@ def test_alpha_zero_equals_the_batched_kalman_functions() -> None:
         x, P = kalman.update(x, P, z[k].reshape(N * K, 2), params.H, params.R_cell)
     np.testing.assert_allclose(state.xc.reshape(N * K, -1), x, atol=1e-9)
     np.testing.assert_allclose(state.Pc.reshape(N * K, 6, 6), P, atol=1e-9)
+
+
+def test_make_predictor_builds_the_structured_predictor() -> None:
+    from mvtrack.filters.predictors import make_predictor
+
+    pred = make_predictor("structured", r=9.0)
+    assert isinstance(pred, StructuredPredictor) and pred.params.r_cell == 9.0
+    s = pred.predict(pred.init(np.array([[10.0, 20.0], [50.0, 60.0]])))
+    np.testing.assert_allclose(pred.position(s), [[10.0, 20.0], [50.0, 60.0]])
+    box = pred.search_region(pred.init_parts(np.zeros((1, 3, 2)), wh=np.ones((1, 3, 2))))
+    np.testing.assert_allclose(box, [[-0.75, -0.75, 0.75, 0.75]])

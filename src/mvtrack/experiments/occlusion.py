@@ -22,10 +22,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.detection.parts import (
+    DetectionZone,
     PartFeatures,
     bgr_to_hsi,
     feature_distance,
     match_parts,
+    moving_box,
     occlusion_degree,
     region_features,
     segment_parts,
@@ -151,7 +153,9 @@ def measurements_from_segmentation(
 ) -> tuple[PartMeasurements, int]:
     """Parts found by hue segmentation inside the SKF's search region, matched frame to frame.
 
-    Frame 0 is segmented inside the door zone (the detection zone); afterwards the segmented
+    The walker is picked up in the door zone (the detection zone) as the MER of the moving
+    region of frames 0 and 1 (:func:`~mvtrack.detection.parts.moving_box`), and frame 0 is
+    segmented inside it; afterwards the segmented
     regions inside the predicted search box are matched to the previous parts by least |ΔF|.
     The filter runs alongside (its prediction gives the search box).
 
@@ -168,7 +172,11 @@ def measurements_from_segmentation(
     alpha = np.ones((T, K))
     wh = np.full((T, K, 2), np.nan)
     H, W = scene.labels.shape[1:]
-    x0, y0, x1, y1 = (int(v) for v in scene.door)
+    # pick-up: the moving region (difference of frames 0 and 1) inside the door zone
+    box = moving_box(scene.frames[0], scene.frames[1], DetectionZone(*scene.door))
+    if box is None:
+        raise ValueError("no moving object in the detection zone at frame 1")
+    x0, y0, x1, y1 = (int(v) for v in box)
     mask = np.zeros((H, W), dtype=bool)
     mask[y0:y1, x0:x1] = True
     hue, sat, inten = bgr_to_hsi(scene.frames[0])
