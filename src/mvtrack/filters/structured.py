@@ -30,6 +30,23 @@ matrices; there is no Python loop over objects or parts in :func:`predict` / :fu
 
 Objects whose parts are missing in a frame get α = 1 for those parts (SPEC §3.3 "No match") and
 NaN measurements; their (1 − α) terms are dropped.
+
+Where we go beyond paper 3 (each documented on the implementing line):
+
+- a relation with an unmatched end gets no update (with α^j = 1, (15) would measure the offset
+  by the part's own prediction) and its derivatives decay by ``relation_damping`` per frame,
+  so a part hidden for many frames keeps a bounded offset;
+- a filter that receives no information at all keeps its prior covariance (E3.9 otherwise);
+- options ``q_rel`` (relation process noise) and ``relation_noise="occlusion"`` (R_r scaled by
+  1/((1 − α^i)(1 − α^j))); the defaults are the SPEC values. On the X9 scene the SPEC-default
+  CA relations extrapolate the legs' swing while they are hidden; the CV option or stiff
+  relations do not (see the ``occlusion`` experiment).
+
+For the tracker, :class:`StructuredPredictor` (name ``structured``, built by
+``mvtrack.filters.predictors.make_predictor("structured")``) wraps the SKF behind the
+:class:`~mvtrack.filters.base.Predictor` protocol: the object position is the mean of its parts;
+whole-object detections move the rigid part layout, and per-part measurements with α go through
+:meth:`StructuredPredictor.update_parts`.
 """
 
 from __future__ import annotations
