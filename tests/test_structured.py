@@ -333,3 +333,40 @@ def test_make_predictor_builds_the_structured_predictor() -> None:
     np.testing.assert_allclose(pred.position(s), [[10.0, 20.0], [50.0, 60.0]])
     box = pred.search_region(pred.init_parts(np.zeros((1, 3, 2)), wh=np.ones((1, 3, 2))))
     np.testing.assert_allclose(box, [[-0.75, -0.75, 0.75, 0.75]])
+
+
+def test_batch_of_objects_equals_one_object_at_a_time() -> None:
+    rng = np.random.default_rng(21)
+    params = SKFParams(normalise="weights")
+    graph = PartGraph.from_edges(4, FIG2_EDGES)
+    N, T = 6, 15
+    z = np.cumsum(rng.normal(0, 2, (T, N, 4, 2)), axis=0)
+    alpha = rng.uniform(0, 1, (T, N, 4))
+    z[rng.random((T, N, 4)) < 0.15] = np.nan  # some parts unmatched
+    z[0] = np.nan_to_num(z[0])
+    batch = init(params, graph, z[0])
+    singles = [init(params, graph, z[0, n : n + 1]) for n in range(N)]
+    for k in range(1, T):
+        batch, _ = update(params, graph, predict(params, batch), z[k], alpha[k])
+        singles = [
+            update(params, graph, predict(params, s), z[k, n : n + 1], alpha[k, n : n + 1])[0]
+            for n, s in enumerate(singles)
+        ]
+    for n, s in enumerate(singles):
+        np.testing.assert_allclose(batch.xc[n], s.xc[0], atol=1e-12)
+        np.testing.assert_allclose(batch.Pr[n], s.Pr[0], atol=1e-12)
+
+
+def test_covariances_stay_symmetric_positive_definite_under_random_occlusion() -> None:
+    rng = np.random.default_rng(4)
+    params = SKFParams()
+    graph = PartGraph.chain(3)
+    s = init(params, graph, rng.normal(0, 10, (20, 3, 2)))
+    for _ in range(200):
+        z = rng.normal(0, 10, (20, 3, 2))
+        z[rng.random((20, 3)) < 0.3] = np.nan
+        s, _ = update(params, graph, predict(params, s), z, rng.uniform(0, 1, (20, 3)))
+    for P in (s.Pc, s.Pr):
+        np.testing.assert_allclose(P, np.swapaxes(P, -1, -2), atol=1e-9)
+        assert np.linalg.eigvalsh(P).min() > 0
+    assert np.all(np.isfinite(s.xc)) and np.all(np.isfinite(s.xr))
