@@ -215,10 +215,12 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
 
     With ``s² = W·H / (320·240)`` (the papers' 320×240, SPEC §1.4):
 
-    - blob stage: ``min_area = 40 s²`` px and a ``close_size ≈ 7 s`` px closing (odd), which
-      merges the fragments of one object — two-tone vehicles and clothes otherwise split into
-      several blobs, the "segmentation splits vehicles by colour" of paper 1 (SPEC §1.5);
-      SPEC §1.1 [R] (opening only, area ≥ 20 px) is ``close_size = 0, min_area = 20``;
+    - blob stage: ``min_area = 40 s²`` px and a 7×7 closing (``close_size = 7``), which merges
+      fragments a few pixels apart — two-tone vehicles and clothes otherwise split into
+      several blobs, the "segmentation splits vehicles by colour" of paper 1 (SPEC §1.5).
+      The closing is not scaled with the image: a larger one merges people walking side by
+      side in 768×576 video. SPEC §1.1 [R] (opening only, area ≥ 20 px) is
+      ``close_size = 0, min_area = 20``;
     - the default tracker preset's Kalman predictors: measurement variance ``r = 4 s²`` px²
       (SPEC §2.1 [R] gives 4 px² at 320×240; blob centroids jitter with the blob's size).
 
@@ -228,7 +230,7 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
     s2 = (w * h) / (REFERENCE_SIZE[0] * REFERENCE_SIZE[1])
     det = dict(settings.detector_params)
     det.setdefault("min_area", float(round(40.0 * s2)))
-    det.setdefault("close_size", int(2 * round((7.0 * s2**0.5 - 1) / 2) + 1))
+    det.setdefault("close_size", 7)
     tracker = dict(settings.tracker)
     predictor = str(tracker.get("predictor", "kalman-cv"))
     if (tracker.get("preset", "default") == "default" and "predictor_params" not in tracker

@@ -236,13 +236,26 @@ def draw_boxes(
             cv2.polylines(image, list(polys[sel]), True, color, thickness, cv2.LINE_8)
     if labels:
         top_left = polys[:, 0, :]
+        h, w = image.shape[:2]
+        scale = max(0.4, min(w, 4 * h / 3) / 1100.0)  # readable at 320×240 and at 768×576
+        thick = 1 if scale < 0.6 else 2
         for i in np.flatnonzero(ok):  # one putText per label: OpenCV draws text one by one
             state = int(tracks.state[i])
             text = f"{int(tracks.track_id[i])}{STATE_LABELS.get(state, '?')}"
             org = (int(top_left[i, 0]), int(max(top_left[i, 1] - 3, 10)))
-            cv2.putText(image, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.4,
-                        STATE_COLORS.get(state, (255, 255, 255)), 1, cv2.LINE_AA)
+            _label(image, text, org, scale, thick, STATE_COLORS.get(state, (255, 255, 255)))
     return image
+
+
+def _label(
+    image: NDArray[np.uint8], text: str, org: tuple[int, int], scale: float, thick: int,
+    color: tuple[int, int, int],
+) -> None:
+    """``text`` in ``color`` on a dark box (readable on any background), baseline at ``org``."""
+    (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, thick)
+    x, y = org
+    cv2.rectangle(image, (x - 1, y - th - 2), (x + tw + 1, y + base - 1), (20, 20, 20), -1)
+    cv2.putText(image, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, color, thick, cv2.LINE_AA)
 
 
 class TrailBuffer:
@@ -330,9 +343,9 @@ def annotate_frame(
     if gate_cov is not None and gate_center is not None and gate_r2 is not None:
         draw_gates(img, gate_center, gate_cov, gate_r2)
     draw_boxes(img, tracks)
+    h, w = img.shape[:2]
+    scale = max(0.4, min(w, 4 * h / 3) / 1100.0)
+    step = round(35 * scale)
     for k, line in enumerate(text):
-        org = (4, 14 + 14 * k)
-        cv2.putText(img, line, org, cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 3, cv2.LINE_AA)
-        cv2.putText(img, line, org, cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1,
-                    cv2.LINE_AA)
+        _label(img, line, (4, step + step * k), scale, 1, (255, 255, 255))
     return img

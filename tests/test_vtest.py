@@ -1,0 +1,69 @@
+"""The whole pipeline on the real campus video ../shared/data/vtest.avi (768×576, 10 fps).
+
+Bounds are sanity bounds around measured values (default settings, full video: 157 tracks,
+68 of them with ≥ 20 rows, median 17 rows per track, median 5 tracks per frame, largest step
+19.7 px per frame): they fail on a broken pipeline (no tracks, one track per detection,
+tracks that jump across the image), not on small changes of the parts.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mvtrack.cli import main
+
+W, H = 768, 576
+
+
+def _rows(out: Path) -> np.ndarray:
+    rows = np.loadtxt(out / "results.txt", delimiter=",", ndmin=2)
+    return rows[np.lexsort((rows[:, 0], rows[:, 1]))]
+
+
+def _check_plausible(rows: np.ndarray, n_frames: int) -> dict[str, float]:
+    ids, counts = np.unique(rows[:, 1], return_counts=True)
+    centre = rows[:, 2:4] + rows[:, 4:6] / 2
+    same = rows[1:, 1] == rows[:-1, 1]
+    step = np.linalg.norm(centre[1:] - centre[:-1], axis=1)[same]
+    gap = (rows[1:, 0] - rows[:-1, 0])[same]
+    per_frame = np.bincount(rows[:, 0].astype(int), minlength=n_frames + 1)[1:]
+    # boxes are people-sized and inside the picture (up to a margin for coasting at the edge)
+    assert np.all((rows[:, 4] > 2) & (rows[:, 4] < W / 2) & (rows[:, 5] > 2) & (rows[:, 5] < H))
+    assert np.all((centre > -50).all(axis=1) & (centre[:, 0] < W + 50) & (centre[:, 1] < H + 50))
+    # no track teleports: at most 40 px per frame between consecutive rows of one track
+    assert np.all(gap >= 1) and (step / gap).max() <= 40.0
+    return {"tracks": len(ids), "median_len": float(np.median(counts)),
+            "long": int((counts >= 20).sum()), "per_frame": float(np.median(per_frame))}
+
+
+def test_vtest_first_150_frames(vtest_path, tmp_path) -> None:
+    out = tmp_path / "vtest"
+    assert main(["track", str(vtest_path), "--out", str(out), "--max-frames", "150",
+                 "--no-video"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 150 and summary["size"] == [W, H]
+    assert summary["video_fps"] == 10.0 and summary["ended_early"] is False
+    stats = _check_plausible(_rows(out), 150)
+    assert 8 <= stats["tracks"] <= 80
+    assert stats["long"] >= 3 and stats["per_frame"] >= 2
+
+
+@pytest.mark.slow
+def test_vtest_whole_video(vtest_path, tmp_path) -> None:
+    out = tmp_path / "vtest"
+    assert main(["track", str(vtest_path), "--out", str(out), "--no-video"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 795 and summary["ended_early"] is False
+    stats = _check_plausible(_rows(out), 795)
+    assert 40 <= stats["tracks"] <= 400, stats
+    assert stats["long"] >= 30, stats
+    assert stats["median_len"] >= 8, stats
+    assert 2 <= stats["per_frame"] <= 20, stats
+    assert summary["tracks"] == stats["tracks"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "results.txt", "summary.json", "trajectories.png"
+    ]
