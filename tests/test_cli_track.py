@@ -143,3 +143,54 @@ def test_unknown_detector_and_predictor_are_one_line_errors(tmp_path, capsys) ->
     assert main(["track", str(video), "--out", str(out), "--predictor", "psychic"]) == 2
     assert "psychic" in _one_line_error(capsys)
     assert not out.exists()
+
+
+def test_ctrl_c_writes_what_was_tracked_and_exits_130(tmp_path, capsys, monkeypatch) -> None:
+    import mvtrack.pipeline as pipeline
+
+    real = pipeline.build_detector
+
+    def interrupting(settings):
+        det = real(settings)
+        calls = {"n": 0}
+
+        def detect(frame):
+            calls["n"] += 1
+            if calls["n"] == 26:
+                raise KeyboardInterrupt  # what Ctrl-C raises in the frame loop
+            return det(frame)
+
+        return detect
+
+    monkeypatch.setattr(pipeline, "build_detector", interrupting)
+    video = _write_avi(tmp_path / "v.avi")
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out)]) == 130
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("error: interrupted after 25 frames"), err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 25 and summary["interrupted"] and summary["ended_early"]
+    rows = np.loadtxt(out / "results.txt", delimiter=",", ndmin=2)
+    assert len(rows) and rows[:, 0].max() <= 25
+    cap = cv2.VideoCapture(str(out / "tracks.mp4"))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 25
+    cap.release()
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]
+
+
+def test_source_failing_mid_way_keeps_tracks_and_says_why(tmp_path, capsys) -> None:
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(30):
+        img = np.full((64, 96, 3), 80, np.uint8)
+        img[28:36, 10 + 2 * k : 20 + 2 * k] = 230
+        cv2.imwrite(str(folder / f"{k:04d}.png"), img)
+    (folder / "0020.png").write_bytes(b"not a png")  # a corrupt frame in the middle
+    out = tmp_path / "out"
+    assert main(["track", str(folder), "--out", str(out), "--no-video"]) == 2
+    err = _one_line_error(capsys)
+    assert "0020.png" in err and str(out) in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 20 and summary["ended_early"] and not summary["interrupted"]
+    assert "0020.png" in summary["error"]
+    assert (out / "results.txt").exists()

@@ -223,3 +223,40 @@ def test_no_video_skips_the_mp4(tmp_path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "results.txt", "summary.json", "trajectories.png"
     ]
+
+
+# ------------------------------------------------------------------ the drawn gate is the gate
+
+
+def _gate_probe(config, offset_dir: np.ndarray, factor: float) -> bool:
+    """Track one target moving 2 px/frame for 12 frames, then put the next detection at
+    ``factor`` times the drawn gate's extent along ``offset_dir``; True if it is associated."""
+    from mvtrack.pipeline import next_gates
+    from mvtrack.tracking import Tracker
+    from mvtrack.viz.annotate import gate_ellipses
+
+    tracker = Tracker(config)
+    rng = np.random.default_rng(0)
+    for k in range(12):
+        xy = np.array([[40.0 + 2.0 * k, 60.0]]) + rng.normal(0, 0.3, (1, 2))
+        tracker.step(Detections(k, xy, [[10.0, 8.0]]))
+    ids, center, shape, r2 = next_gates(tracker, 12)
+    assert ids.size == 1
+    # distance to the boundary along offset_dir: t with (t u)ᵀ C⁻¹ (t u) = r²
+    u = offset_dir / np.linalg.norm(offset_dir)
+    t = np.sqrt(r2[0] / (u @ np.linalg.inv(shape[0]) @ u))
+    axes, _ = gate_ellipses(shape, r2)
+    assert axes[0, 1] - 1e-9 <= t <= axes[0, 0] + 1e-9
+    out = tracker.step(Detections(12, center + factor * t * u, [[10.0, 8.0]]))
+    return bool(len(out) and out.det_index[out.track_id == ids[0]][0] >= 0)
+
+
+@pytest.mark.parametrize("preset", ["paper1", "paper2", "default"])
+@pytest.mark.parametrize("direction", [(1.0, 0.0), (0.0, 1.0), (1.0, -1.0)])
+def test_drawn_gate_is_the_trackers_gate(preset: str, direction: tuple[float, float]) -> None:
+    from mvtrack.tracking import preset as make_preset
+
+    config = make_preset(preset, fps=30.0)
+    d = np.asarray(direction)
+    assert _gate_probe(config, d, 0.97)
+    assert not _gate_probe(config, d, 1.03)
