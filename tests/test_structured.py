@@ -370,3 +370,35 @@ def test_covariances_stay_symmetric_positive_definite_under_random_occlusion() -
         np.testing.assert_allclose(P, np.swapaxes(P, -1, -2), atol=1e-9)
         assert np.linalg.eigvalsh(P).min() > 0
     assert np.all(np.isfinite(s.xc)) and np.all(np.isfinite(s.xr))
+
+
+def test_tracker_runs_with_the_structured_predictor() -> None:
+    from mvtrack.tracking import TrackerConfig, track_detections
+    from mvtrack.types import Detections
+
+    rng = np.random.default_rng(0)
+    truth = {
+        k: np.array([[100 + 2.0 * k, 100.0 + k], [300 - 2.0 * k, 220.0 + k]]) for k in range(40)
+    }
+    frames = [
+        Detections.from_tlwh(
+            k,
+            np.hstack([truth[k] + rng.normal(0, 1, (2, 2)) - [10, 20], np.tile([20, 40], (2, 1))]),
+            np.ones(2),
+        )
+        for k in range(40)
+    ]
+    rows = np.asarray(track_detections(frames, TrackerConfig(predictor="structured")).to_mot())
+    ids = np.unique(rows[:, 1])
+    assert len(ids) == 2
+    for i in ids:  # each track stays on one target: its centres are near one truth path
+        r = rows[rows[:, 1] == i]
+        k = r[:, 0].astype(int) - 1  # MOTChallenge frames are 1-based
+        centre = r[:, 2:4] + r[:, 4:6] / 2
+        d = np.array(
+            [
+                [np.linalg.norm(c - truth[kk][t]) for t in (0, 1)]
+                for c, kk in zip(centre, k, strict=True)
+            ]
+        )
+        assert np.all(d.min(axis=1) < 3.0) and len(set(d.argmin(axis=1).tolist())) == 1

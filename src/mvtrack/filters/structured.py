@@ -762,6 +762,9 @@ class StructuredPredictor:
 
     :meth:`init` places the parts at ``xy + offsets`` (``offsets`` (K, 2), default a vertical
     head/torso/legs layout of a ~70 px tall person) unless :meth:`init_parts` is used.
+
+    ``r``, ``q`` and ``vel_var`` (the keywords the tracker passes to every predictor) override
+    ``params.r_cell``, ``params.q`` and ``params.p0_vel``.
     """
 
     name: str = "structured"
@@ -771,14 +774,22 @@ class StructuredPredictor:
         default_factory=lambda: np.array([[0.0, -21.0], [0.0, 0.0], [0.0, 32.0]])
     )
     r: float | None = None
+    q: float | None = None
+    vel_var: float | None = None
 
     def __post_init__(self) -> None:
         off = np.asarray(self.offsets, dtype=float)
         if off.shape != (self.graph.n_parts, 2):
             raise ValueError(f"offsets must have shape ({self.graph.n_parts}, 2), got {off.shape}")
         object.__setattr__(self, "offsets", off - off.mean(axis=0))
-        if self.r is not None:
-            object.__setattr__(self, "params", dataclasses.replace(self.params, r_cell=self.r))
+        # the tracker's common keywords: r (px²), q, vel_var (initial velocity variance)
+        changes = {
+            name: value
+            for name, value in (("r_cell", self.r), ("q", self.q), ("p0_vel", self.vel_var))
+            if value is not None
+        }
+        if changes:
+            object.__setattr__(self, "params", dataclasses.replace(self.params, **changes))
 
     def init_parts(self, z: FloatArray, wh: FloatArray | None = None) -> StructuredPredictorState:
         """State for new tracks from part measurements ``z`` (K, parts, 2)."""
