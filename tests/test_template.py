@@ -89,13 +89,16 @@ def test_only_the_tracks_with_templates_are_searched_and_order_is_kept() -> None
     np.testing.assert_allclose(xy[[0, 2]], [_centre(b), _centre(a)], atol=0.01)
 
 
-def test_search_window_clipped_at_the_border_and_skipped_when_no_room() -> None:
-    tl = (0, 0)  # vehicle in the corner; prediction near the corner
+def test_search_window_clipped_at_the_border_and_skipped_when_leaving_the_image() -> None:
+    tl = (3, 2)  # vehicle near the corner; prediction up-left of it, template still inside
     bank = _bank_with_vehicle(tl)
-    found, xy, _ = bank.rescue(_frame(tl, seed=2), [7], [_centre(tl) - 5])
+    found, xy, _ = bank.rescue(_frame(tl, seed=2), [7], [_centre(tl) - 2])
     assert found[0]
     np.testing.assert_allclose(xy[0], _centre(tl), atol=0.01)
-    # prediction far outside the image: no room for the template, not found, no error
+    # predicted so that the template would stick out of the image: leaving, not searched
+    found, _, score = bank.rescue(_frame(tl, seed=2), [7], [_centre(tl) - 4])
+    assert not found[0] and np.isnan(score[0])
+    # prediction far outside the image: not found, no error
     found, _, score = bank.rescue(_frame(tl, seed=2), [7], [[-200.0, -200.0]])
     assert not found[0] and np.isnan(score[0])
 

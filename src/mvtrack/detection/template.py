@@ -49,6 +49,15 @@ def _grey(img: Image) -> Image:
     return img if img.ndim == 2 else cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
 
 
+def _member(a: IntArray, b: IntArray) -> BoolArray:
+    """``np.isin(a, b)`` for small integer arrays, without its generic overhead."""
+    if a.size == 0 or b.size == 0:
+        return np.zeros(a.size, bool)
+    b = np.sort(b)
+    pos = np.minimum(np.searchsorted(b, a), b.size - 1)
+    return b[pos] == a
+
+
 class _Template:
     """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
     the observation tick."""
@@ -263,11 +272,15 @@ class TemplateBank:
 
     def retain(self, uids: ArrayLike) -> None:
         """Keep only the tracks in ``uids`` (the live ones); forget deleted tracks."""
-        self._keep(np.isin(self.uids, np.asarray(uids, np.int64).reshape(-1)))
+        keep = _member(self.uids, np.asarray(uids, np.int64).reshape(-1))
+        if not keep.all():
+            self._keep(keep)
 
     def drop(self, uids: ArrayLike) -> None:
         """Forget the tracks in ``uids`` (e.g. deleted by the tracker)."""
-        self._keep(~np.isin(self.uids, np.asarray(uids, np.int64).reshape(-1)))
+        gone = _member(self.uids, np.asarray(uids, np.int64).reshape(-1))
+        if gone.any():
+            self._keep(~gone)
 
     def _keep(self, keep: BoolArray) -> None:
         for u in self.uids[~keep].tolist():
@@ -352,7 +365,9 @@ class TemplateBank:
 
         (``cv2.TM_CCOEFF_NORMED``) is evaluated for every placement whose box centre lies within
         ``gate_radius`` of the prediction (a circle; the search window is clipped to the
-        image), and the best placement is accepted if its NCC ≥ ``min_score``.
+        image), and the best placement is accepted if its NCC ≥ ``min_score``. A track whose
+        template, placed at the prediction, would stick out of the image is not searched (an
+        object leaving the picture has not stopped); this also keeps the loop short.
 
         Parameters
         ----------
@@ -405,10 +420,10 @@ class TemplateBank:
             px, py = pxy[j]
             # top-left of the template when its box centre sits on the prediction
             tx, ty = round(px - ox), round(py - oy)
+            if tx < 0 or ty < 0 or tx + pw > width or ty + ph > height:
+                continue  # predicted partly outside the image: leaving, not stopped
             x0, y0 = max(tx - ri, 0), max(ty - ri, 0)
             x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
-            if x1 - x0 < pw or y1 - y0 < ph:
-                continue  # the window left the image
             window = _grey(frame[y0:y1, x0:x1])
             if t.mask is None:
                 ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)

@@ -1,0 +1,228 @@
+"""Whole-pipeline speed: decode → detect (disturbance map) → track, frames per second, one core.
+
+Sequences:
+
+* ``vtest.avi`` — the real 768×576 campus recording (795 frames, XVID/MPEG-4 in AVI), read from
+  ``../shared/data/vtest.avi`` beside the checkout (or ``--vtest``);
+* ``x5`` — paper 1's synthetic intersection (SPEC X5) rendered at 320×240 by
+  :mod:`mvtrack.sim.render` and written to a temporary MP4 (``mp4v``), so decoding is measured
+  too. If the renderer is unavailable, a simple scene of textured rectangles on noisy grey is
+  rendered here instead (the table says which).
+
+Stages, each timed over the whole sequence (CPU time of the process, ``time.process_time``,
+which is what one dedicated core would take; wall-clock time is printed beside it because the
+machine may be shared): ``decode`` (``open_source`` only), ``+ detect``
+(decode and :class:`~mvtrack.detection.DisturbanceMap` with its SPEC §1.1 defaults) and
+``+ track`` (also :class:`~mvtrack.tracking.Tracker` with the ``default`` preset at the source's
+frame rate, and template matching of missed confirmed tracks). No video is written. Rendering
+the synthetic video is not timed. OpenCV runs on one thread (``cv2.setNumThreads(1)``) and BLAS
+is pinned to one thread before NumPy loads. Each figure is the median of ``--repeats`` runs;
+the decode share is median decode CPU time / median CPU time of the stage.
+
+Usage::
+
+    python benchmarks/bench_pipeline.py                 # both sequences, 5 repeats
+    python benchmarks/bench_pipeline.py --repeats 3 --detector frame-diff
+    python benchmarks/bench_pipeline.py --markdown      # also print the Markdown table
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+
+from mvtrack.detection import make_detector  # noqa: E402
+from mvtrack.io.video import open_source  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+VTEST = ROOT.parent / "shared" / "data" / "vtest.avi"
+
+#: paper 1 (SPEC §1.4): 30 fps at 320×240 on a Pentium Pro 200 MHz; issue 4's targets
+PAPER_FPS = 30.0
+TARGETS = {(320, 240): 1000.0, (768, 576): 150.0}
+
+
+def _write(frames: list[np.ndarray], path: Path, fps: float) -> None:
+    h, w = frames[0].shape[:2]
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, (w, h))
+    if not writer.isOpened():
+        raise OSError(f"cannot write {path} with OpenCV (mp4v)")
+    for f in frames:
+        writer.write(f)
+    writer.release()
+
+
+def simple_scene(n: int = 360, size: tuple[int, int] = (320, 240), seed: int = 0) -> list:
+    """Fallback: 8 two-tone rectangles crossing a noisy grey road, ``n`` frames."""
+    rng = np.random.default_rng(seed)
+    w, h = size
+    bg = np.clip(rng.normal(100, 8, (h, w)), 0, 255).astype(np.uint8)
+    start = rng.uniform([0, 20], [w, h - 20], (8, 2))
+    vel = rng.uniform(-3, 3, (8, 2))
+    out = []
+    for k in range(n):
+        img = bg.copy()
+        xy = (start + k * vel) % [w, h]
+        for i, (x, y) in enumerate(xy.astype(int)):
+            img[y : y + 8, x : x + 14] = 40 + 20 * i
+            img[y : y + 8, x + 7 : x + 14] = 200
+        noisy = img.astype(np.int16) + rng.integers(-4, 5, img.shape, dtype=np.int16)
+        out.append(cv2.cvtColor(np.clip(noisy, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
+    return out
+
+
+def synthetic_video(folder: Path) -> tuple[Path, str]:
+    """X5 at 320×240 as an MP4 (or the fallback scene); returns (path, description)."""
+    path = folder / "x5.mp4"
+    try:
+        from mvtrack.sim.render import write_video
+        from mvtrack.sim.scenes import x5_intersection
+
+        scene = x5_intersection(0)
+        write_video(scene, path, seed=0, size=(320, 240), progress=False)
+        return path, f"X5 intersection, 320×240, {scene.n_frames} frames (mp4v)"
+    except ImportError:
+        frames = simple_scene()
+        _write(frames, path, 30.0)
+        return path, f"moving rectangles, 320×240, {len(frames)} frames (mp4v)"
+
+
+def run_stage(
+    video: Path, stage: str, detector: str, templates: bool = True, max_frames: int | None = None
+) -> tuple[int, float, float]:
+    """Frames processed, CPU seconds and wall seconds for one pass of ``stage`` over ``video``."""
+    with open_source(video) as src:
+        det: Callable | None = None
+        tracker = rescuer = None
+        if stage != "decode":
+            det = make_detector(detector)
+        if stage == "track":
+            from mvtrack.detection.template import TemplateBank, TemplateRescuer
+            from mvtrack.tracking import Tracker, preset
+
+            tracker = Tracker(preset("default", fps=src.fps))
+            if templates:
+                rescuer = TemplateRescuer(TemplateBank(), tracker, detector=det)
+        n = 0
+        c0, t0 = time.process_time(), time.perf_counter()
+        for _, frame in src:
+            if max_frames is not None and n >= max_frames:
+                break
+            if det is not None:
+                dets = det(frame)
+                if tracker is not None:
+                    if rescuer is None:
+                        tracker.step(dets)
+                    else:
+                        out = tracker.step(dets, rescue=rescuer.callback(frame))
+                        rescuer.observe(frame, dets, out)
+            n += 1
+        return n, time.process_time() - c0, time.perf_counter() - t0
+
+
+def bench(
+    video: Path, stages: list[str], repeats: int, detector: str, templates: bool
+) -> dict[str, tuple[float, float]]:
+    """Median (CPU, wall) seconds per stage; repeats interleave the stages so that changes of
+    load on the shared machine hit all stages alike."""
+    cpu: dict[str, list[float]] = {s: [] for s in stages}
+    wall: dict[str, list[float]] = {s: [] for s in stages}
+    n_frames = 0
+    for s in stages:  # warm-up: lazy imports (SciPy) and first-call costs are not timed
+        run_stage(video, s, detector, templates, max_frames=50)
+    for _ in range(repeats):
+        for s in stages:
+            n_frames, c, w = run_stage(video, s, detector, templates)
+            cpu[s].append(c)
+            wall[s].append(w)
+    med = {s: (statistics.median(cpu[s]), statistics.median(wall[s])) for s in stages}
+    med["frames"] = (float(n_frames), float(n_frames))
+    return med
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--vtest", type=Path, default=VTEST, help="path of vtest.avi")
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--detector", default="disturbance-map")
+    ap.add_argument("--no-track", action="store_true", help="skip the tracking stage")
+    ap.add_argument("--no-templates", action="store_true", help="track without template matching")
+    ap.add_argument("--markdown", action="store_true", help="print a Markdown table too")
+    args = ap.parse_args(argv)
+    cv2.setNumThreads(1)
+
+    stages = ["decode", "detect"]
+    if not args.no_track:
+        try:
+            import mvtrack.tracking  # noqa: F401
+        except ImportError:
+            print("tracker not available: timing decode + detect only", file=sys.stderr)
+        else:
+            stages.append("track")
+
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        videos = []
+        synth, desc = synthetic_video(Path(tmp))
+        videos.append((synth, desc))
+        if args.vtest.exists():
+            videos.append((args.vtest, "vtest.avi, 768×576, 795 frames (XVID)"))
+        else:
+            print(f"{args.vtest} not found: skipping the real video", file=sys.stderr)
+        for video, desc in videos:
+            with open_source(video) as src:
+                size = src.size
+            med = bench(video, stages, args.repeats, args.detector, not args.no_templates)
+            n = med["frames"][0]
+            for s in stages:
+                fps = n / med[s][0]
+                wall_fps = n / med[s][1]
+                share = med["decode"][0] / med[s][0]
+                rows.append((desc, size, s, fps, wall_fps, share))
+                target = TARGETS.get(size)
+                mark = (
+                    ""
+                    if target is None or s == "decode"
+                    else f"  (target ≥ {target:g}: {'met' if fps >= target else 'NOT met'})"
+                )
+                print(
+                    f"{desc:44s} {s:7s} {fps:7.0f} fps CPU ({1e3 / fps:6.2f} ms/frame), "
+                    f"{wall_fps:7.0f} fps wall, decode {100 * share:5.1f} %{mark}"
+                )
+    if args.markdown:
+        names = {
+            "decode": "decode",
+            "detect": "decode + detect",
+            "track": "decode + detect + track",
+        }
+        print()
+        print(
+            "| sequence | stage | fps (CPU) | ms/frame (CPU) | fps (wall) | decoding share "
+            "| target |"
+        )
+        print("|---|---|---:|---:|---:|---:|---:|")
+        for desc, size, s, fps, wall_fps, share in rows:
+            target = TARGETS.get(size)
+            t = f"≥ {target:g}" if target and s != "decode" else ""
+            print(
+                f"| {desc} | {names[s]} | {fps:.0f} | {1e3 / fps:.2f} | {wall_fps:.0f} "
+                f"| {100 * share:.0f} % | {t} |"
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
