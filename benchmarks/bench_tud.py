@@ -9,8 +9,8 @@ Runs the tracker for every predictor × distance × assignment rule on two kinds
 
 and scores the results against ``gt.txt`` with :func:`mvtrack.eval.metrics.evaluate` (MOTA,
 IDF1 via motmetrics at IoU 0.5, HOTA via TrackEval). Everything except predictor, distance,
-assignment and the distance's default gate is the tracker's default configuration
-(:func:`mvtrack.tracking.default`) at the sequences' 25 fps.
+assignment is the tracker's default configuration (:func:`mvtrack.tracking.default`) at the
+sequences' 25 fps; a distance other than the default's gets its own default gate.
 
 Usage::
 
@@ -156,11 +156,16 @@ def run_one(
     """
     from mvtrack.tracking import default, track_detections
 
+    base = default(fps=FPS)
     fields: dict[str, Any] = {
         "predictor": combo.predictor, "distance": combo.distance, "assign": combo.assign,
-        "gate": None,
     }
-    config = default(fps=FPS).replace(**{**fields, **(changes or {})})
+    if combo.distance != base.distance:
+        fields["gate"] = None  # the gate is in the distance's units: use its default
+    changes = changes or {}
+    if changes.get("distance", base.distance) != base.distance and "gate" not in changes:
+        changes = {**changes, "gate": None}
+    config = base.replace(**{**fields, **changes})
     t0 = time.perf_counter()
     log = track_detections(frames, config)
     seconds = time.perf_counter() - t0
@@ -239,8 +244,9 @@ def report(
         f"({'mean of seeds 0..' + str(seeds - 1) if seeds > 1 else 'seed 0'}). "
         "MOTA and IDF1 by motmetrics at IoU 0.5, HOTA by TrackEval "
         "(`mvtrack.eval.metrics.evaluate`). Everything but predictor, distance and assignment "
-        "rule is the tracker's default configuration at 25 fps, with each distance's default "
-        "gate. Rows of coasting (missed, predicted) tracks are "
+        "rule is the tracker's default configuration at 25 fps; where the distance differs "
+        "from the default's, the gate is that distance's default. Rows of coasting (missed, "
+        "predicted) tracks are "
         + ("included in" if coasting else "left out of")
         + " the results.",
         "",
