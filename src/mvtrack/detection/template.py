@@ -60,9 +60,9 @@ def _member(a: IntArray, b: IntArray) -> BoolArray:
 
 class _Template:
     """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
-    the observation tick."""
+    the observation tick; for a masked template also the terms of :func:`masked_ncc`."""
 
-    __slots__ = ("mask", "offset", "patch", "tick")
+    __slots__ = ("mask", "mf", "offset", "patch", "tick", "tz", "var_t")
 
     def __init__(
         self, patch: Image, mask: Image | None, offset: tuple[float, float], tick: int
@@ -71,6 +71,39 @@ class _Template:
         self.mask = mask
         self.offset = offset
         self.tick = tick
+        if mask is not None:
+            self.mf = (mask > 0).astype(np.float32)
+            t = patch.astype(np.float32)
+            self.tz = (t - float(t[mask > 0].mean())) * self.mf  # T − T̄ on the mask, 0 off it
+            self.var_t = float((self.tz * self.tz).sum())
+
+
+def masked_ncc(
+    window: Image, tz: NDArray[np.float32], mf: NDArray[np.float32], var_t: float
+) -> NDArray[np.float32]:
+    r"""NCC of a template over its mask pixels ``M`` only, at every placement in ``window``.
+
+    .. math::
+
+        \mathrm{NCC}(u) = \frac{\sum_M (T - \bar T)(I_u - \bar I_u)}
+            {\sqrt{\sum_M (T - \bar T)^2 \; \sum_M (I_u - \bar I_u)^2}},
+        \quad \sum_M (T - \bar T)(I_u - \bar I_u) = \sum_M (T - \bar T) I_u,
+        \quad \sum_M (I_u - \bar I_u)^2 = \sum_M I_u^2 - \tfrac{1}{n}\big(\sum_M I_u\big)^2,
+
+    with means over the ``n`` mask pixels: three plain correlations (``cv2.TM_CCORR``), the
+    same values as ``cv2.matchTemplate(..., TM_CCOEFF_NORMED, mask=M)`` (to ~1e-5) at a third
+    to two thirds of its cost. ``tz`` is :math:`(T - \bar T)` on the mask and 0 off it, ``mf``
+    the mask as 0/1 floats, ``var_t`` :math:`\sum_M (T - \bar T)^2`. Flat placements give NaN.
+    """
+    w = window.astype(np.float32)
+    w -= float(w.mean())  # smaller sums, less float32 cancellation below
+    n = float(mf.sum())
+    num = cv2.matchTemplate(w, tz, cv2.TM_CCORR)
+    s1 = cv2.matchTemplate(w, mf, cv2.TM_CCORR)
+    s2 = cv2.matchTemplate(w * w, mf, cv2.TM_CCORR)
+    var_i = s2 - s1 * s1 / n
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return num / np.sqrt(np.where(var_i > 1e-6 * n, var_i, np.nan) * var_t)
 
 
 class TemplateBank:
@@ -428,7 +461,7 @@ class TemplateBank:
             if t.mask is None:
                 ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
             else:  # NCC over the object's pixels only
-                ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED, mask=t.mask)
+                ncc = masked_ncc(window, t.tz, t.mf, t.var_t)
             # centre of placement (row i, col c) is (x0 + c + ox, y0 + i + oy); circular gate
             cx = x0 + np.arange(ncc.shape[1]) + ox - px
             cy = y0 + np.arange(ncc.shape[0]) + oy - py
