@@ -13,6 +13,8 @@ from mvtrack.cli import main
 from mvtrack.cli.track import parse_gate
 from mvtrack.config import RunSettings, load_config
 from mvtrack.errors import InputError
+from mvtrack.types import TrackState
+from mvtrack.viz.annotate import STATE_COLORS
 
 
 def _write_avi(path: Path, n: int = 40) -> Path:
@@ -194,3 +196,20 @@ def test_source_failing_mid_way_keeps_tracks_and_says_why(tmp_path, capsys) -> N
     assert summary["frames"] == 20 and summary["ended_early"] and not summary["interrupted"]
     assert "0020.png" in summary["error"]
     assert (out / "results.txt").exists()
+
+
+def test_snapshot_saves_one_annotated_frame(tmp_path, capsys) -> None:
+    video = _write_avi(tmp_path / "v.avi")
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--no-video", "--snapshot", "30"]) == 0
+    shot = cv2.imread(str(out / "frame00030.png"))
+    assert shot is not None and shot.shape == (64, 96, 3)
+    # the moving box is at x = 54..63, y = 28..35 in frame 30: a box in the colour of the
+    # confirmed state is drawn around it (the raw frame holds no such colour)
+    confirmed = (shot == np.array(STATE_COLORS[int(TrackState.CONFIRMED)], np.uint8)).all(axis=2)
+    ys, xs = np.nonzero(confirmed)
+    assert xs.size > 10
+    assert xs.min() <= 56 and xs.max() >= 61 and ys.min() <= 31 and ys.max() >= 32
+    assert abs(xs.mean() - 58.5) < 6 and abs(ys.mean() - 31.5) < 6
+    assert json.loads((out / "summary.json").read_text())["files"]["snapshot"] == "frame00030.png"
+    assert main(["track", str(video), "--out", str(tmp_path / "o2"), "--snapshot", "-1"]) == 2

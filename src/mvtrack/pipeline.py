@@ -514,6 +514,7 @@ def track_to_folder(
     progress: bool | None = None,
     parts: tuple[Any, Any] | None = None,
     source_error: Callable[[], str | None] | None = None,
+    snapshot: int | None = None,
 ) -> RunOutput:
     """Track ``frames`` and write everything into the folder ``out``.
 
@@ -525,7 +526,8 @@ def track_to_folder(
     - ``tracks.mp4`` — the annotated video (unless ``settings.video`` is False): boxes in
       their state colour, IDs, trails and the predicted gates (ellipse or circle);
     - ``trajectories.png`` — every track's path over the first frame;
-    - ``summary.json`` — frames, tracks, states histogram, speed, settings, ``ended_early``.
+    - ``summary.json`` — frames, tracks, states histogram, speed, settings, ``ended_early``;
+    - ``frameNNNNN.png`` — one annotated frame, if ``snapshot`` is given.
 
     Ctrl-C during the loop ends it early; the files are still written for the frames
     processed (``summary["interrupted"]``).
@@ -555,6 +557,9 @@ def track_to_folder(
     source_error : callable, optional
         Asked after the loop why the source ended early (e.g. ``lambda: src.error`` of a
         :class:`~mvtrack.io.video.FrameSource`); its answer goes to ``result.error``.
+    snapshot : int, optional
+        Also save the annotated frame with this index as ``frameNNNNN.png`` (lossless), with or
+        without the video.
     """
     import cv2
 
@@ -593,15 +598,26 @@ def track_to_folder(
             log.append(tracks)
             if k == 0:
                 background.append(image.copy())
-            if writer is None:
+            shot = snapshot is not None and k == snapshot
+            if writer is None and snapshot is None:
                 return
             trails.push(tracks)
+            if writer is None and not shot:
+                return
             gates: dict[str, Any] = {}
             if settings.gates:
                 _, center, shape, r2 = next_gates(tracker, k + 1)
                 gates = {"gate_center": center, "gate_cov": shape, "gate_r2": r2}
             text = [f"frame {k}  tracks {len(tracks)}", label]
-            writer.write(annotate_frame(image, tracks, trails=trails, text=text, **gates))
+            img = annotate_frame(image, tracks, trails=trails, text=text, **gates)
+            if writer is not None:
+                writer.write(img)
+            if shot:
+                dest = out / f"frame{k:05d}.png"
+                with atomic_path(dest) as tmp_png:
+                    if not cv2.imwrite(str(tmp_png), img, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
+                        raise OSError(f"cannot write {dest}")
+                paths["snapshot"] = dest
 
         result = run_frames(
             frames, detector, tracker, rescuer=rescuer, max_frames=max_frames,

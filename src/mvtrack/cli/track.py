@@ -75,6 +75,10 @@ def register(app: typer.Typer) -> None:
         fps: Annotated[
             float | None, typer.Option(help="Frame rate to assume instead of the source's.")
         ] = None,
+        snapshot: Annotated[
+            int | None,
+            typer.Option(help="Also save the annotated frame N (0-based) as frameNNNNN.png."),
+        ] = None,
     ) -> None:
         """Track the moving objects of VIDEO; write results.txt (MOTChallenge), tracks.mp4,
         trajectories.png and summary.json into --out.
@@ -95,6 +99,8 @@ def register(app: typer.Typer) -> None:
 
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
+        if snapshot is not None and snapshot < 0:
+            raise ValueError(f"--snapshot must be a frame index >= 0, got {snapshot}")
         settings = load_config(config) if config is not None else RunSettings()
         settings = settings.with_overrides(
             preset=preset, predictor=predictor, gate=parse_gate(gate), distance=distance,
@@ -121,7 +127,7 @@ def register(app: typer.Typer) -> None:
             run = track_to_folder(
                 (frame for _, frame in src), fps=src.fps, size=src.size, settings=settings,
                 out=out, max_frames=max_frames, total=src.frame_count, source=str(video),
-                parts=parts, source_error=lambda: src.error,
+                parts=parts, source_error=lambda: src.error, snapshot=snapshot,
             )
         res, summary = run.result, run.summary
         typer.echo(

@@ -237,7 +237,7 @@ def draw_boxes(
     if labels:
         top_left = polys[:, 0, :]
         h, w = image.shape[:2]
-        scale = max(0.4, min(w, 4 * h / 3) / 1100.0)  # readable at 320×240 and at 768×576
+        scale = _text_scale(w, h)
         thick = 1 if scale < 0.6 else 2
         for i in np.flatnonzero(ok):  # one putText per label: OpenCV draws text one by one
             state = int(tracks.state[i])
@@ -245,6 +245,12 @@ def draw_boxes(
             org = (int(top_left[i, 0]), int(max(top_left[i, 1] - 3, 10)))
             _label(image, text, org, scale, thick, STATE_COLORS.get(state, (255, 255, 255)))
     return image
+
+
+def _text_scale(w: int, h: int) -> float:
+    """Font scale: 0.4 at 320×240, growing with larger frames, smaller for tiny ones."""
+    side = min(w, 4 * h / 3)
+    return max(min(0.4, side / 800.0), side / 1100.0)
 
 
 def _label(
@@ -344,7 +350,7 @@ def annotate_frame(
         draw_gates(img, gate_center, gate_cov, gate_r2)
     draw_boxes(img, tracks)
     h, w = img.shape[:2]
-    scale = max(0.4, min(w, 4 * h / 3) / 1100.0)
+    scale = _text_scale(w, h)
     step = round(35 * scale)
     for k, line in enumerate(text):
         _label(img, line, (4, step + step * k), scale, 1, (255, 255, 255))
