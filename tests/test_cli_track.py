@@ -213,3 +213,24 @@ def test_snapshot_saves_one_annotated_frame(tmp_path, capsys) -> None:
     assert abs(xs.mean() - 58.5) < 6 and abs(ys.mean() - 31.5) < 6
     assert json.loads((out / "summary.json").read_text())["files"]["snapshot"] == "frame00030.png"
     assert main(["track", str(video), "--out", str(tmp_path / "o2"), "--snapshot", "-1"]) == 2
+
+
+def test_preset_arguments_go_to_the_preset(tmp_path) -> None:
+    """``--preset paper1 --predictor rls`` builds paper1 for RLS (its own parameters), not the
+    Kalman preset with the predictor name swapped."""
+    from mvtrack.pipeline import build_tracker_config
+    from mvtrack.tracking import paper1
+
+    cfg = build_tracker_config(RunSettings(tracker={"preset": "paper1", "predictor": "rls",
+                                                    "gate": 100.0}), fps=15.0)
+    ref = paper1("rls", fps=15.0).replace(gate=100.0)
+    assert cfg == ref
+    video = _write_avi(tmp_path / "v.avi")
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--preset", "paper1", "--predictor",
+                 "rls", "--no-video", "--max-frames", "10"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["tracker"]["predictor"] == "rls"
+    assert summary["tracker"]["predictor_params"] == dict(ref.predictor_params)
+    with pytest.raises(InputError, match="preset"):
+        build_tracker_config(RunSettings(tracker={"preset": "paper9"}), fps=15.0)

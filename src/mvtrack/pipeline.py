@@ -255,26 +255,35 @@ def build_detector(settings: RunSettings) -> Callable[[Image], Detections]:
 def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     """The :class:`~mvtrack.tracking.TrackerConfig` of ``settings`` at frame rate ``fps``.
 
-    ``settings.tracker["preset"]`` (default ``"default"``) is built for ``fps`` and its other
-    keys replace fields of the preset.
+    ``settings.tracker["preset"]`` (default ``"default"``) is built for ``fps``; keys the preset
+    function takes as arguments (e.g. ``paper1(predictor=...)``, which then picks the
+    predictor's own parameters) are passed to it, the others replace fields of the result.
 
     Raises
     ------
     InputError
         Unknown preset or field, or a bad value (one line).
     """
-    from mvtrack.tracking import TrackerConfig, preset
+    import inspect
+
+    from mvtrack.tracking import PRESETS, TrackerConfig
 
     params = dict(settings.tracker)
     name = params.pop("preset", "default")
+    if name not in PRESETS:
+        raise InputError(f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}")
     known = {f.name for f in dataclasses.fields(TrackerConfig)}
     for key in params:
         if key not in known:
             raise InputError(
                 f"unknown tracker setting {key!r} (known: {', '.join(sorted(known))})"
             )
+    build = PRESETS[name]
+    takes = set(inspect.signature(build).parameters) - {"fps"}
+    args = {k: params.pop(k) for k in list(params) if k in takes}
     try:
-        return preset(name, fps=fps, **params)
+        config = build(fps=fps, **args)
+        return config.replace(**params) if params else config
     except (TypeError, ValueError) as exc:
         raise InputError(f"tracker settings: {exc}") from None
 
