@@ -11,7 +11,7 @@ import sys
 
 import typer
 
-from mvtrack.cli import demo, evaluate, experiment, simulate, track, track_detections
+from mvtrack.cli import batch, demo, evaluate, experiment, simulate, track, track_detections
 
 app = typer.Typer(
     name="mvtrack",
@@ -29,7 +29,7 @@ def _root() -> None:
     """Track many moving objects in fixed-camera video, and compare predictors honestly."""
 
 
-for _module in (demo, track, track_detections, evaluate, simulate, experiment):
+for _module in (demo, track, track_detections, batch, evaluate, simulate, experiment):
     _module.register(app)
 
 # Typer ships its own copy of Click; find its exception classes through a public name.

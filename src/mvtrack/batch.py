@@ -1,0 +1,496 @@
+"""Many videos in parallel: one ``mvtrack track`` run per video, spread over Dask workers.
+
+.. code-block:: text
+
+    videos ─▶ client.map(track_video, ...)   one task per video, pure=False
+           ─▶ worker: open_source ─▶ resolve_settings ─▶ track_to_folder   (as ``mvtrack track``)
+           ─▶ as_completed ─▶ BatchItem per video ─▶ out_root/batch.json
+
+:func:`track_many` runs every video through the same code path as ``mvtrack track``
+(:func:`track_video`), each into its own folder ``out_root/<video stem>/``, so a batch gives the
+same ``results.txt`` as tracking the videos one after another. The work runs on
+:mod:`distributed`:
+
+- ``scheduler=None`` starts a private ``LocalCluster`` of ``workers`` processes with one thread
+  each (no dashboard) and closes it at the end;
+- ``scheduler="tcp://host:port"`` connects to a running Dask scheduler, whose workers may sit on
+  other machines. Those workers must be able to import mvtrack and must see the video paths and
+  the output folder under the same names (a shared file system); paths are made absolute before
+  they are sent. See ``docs/batch.md``.
+
+A video that fails (missing, unreadable, a bad frame mid-way) is recorded with its one-line
+error and does not stop the others. ``out_root/batch.json`` (written atomically after every
+finished video) lists per video its status, frames, tracks, processing speed, seconds and error.
+Ctrl-C cancels the pending videos, closes the client and cluster and still writes
+``batch.json`` for what finished.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import glob
+import logging
+import os
+import re
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from mvtrack.config import RunSettings
+
+#: the statuses of a :class:`BatchItem`
+STATUSES: tuple[str, ...] = ("ok", "failed", "cancelled")
+
+#: file name of the batch summary inside ``out_root``
+SUMMARY_NAME = "batch.json"
+
+_URL = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
+_QUIET_LOGGERS = ("distributed", "tornado", "bokeh", "asyncio")
+
+
+@dataclass
+class BatchItem:
+    """The outcome of one video of a batch.
+
+    Attributes
+    ----------
+    video : str
+        The video as given to the worker (an absolute path, or a URL).
+    out : str
+        Its output folder.
+    status : str
+        ``"ok"``; ``"failed"`` (``error`` says why; a video that broke off mid-way keeps the
+        files of the frames before); ``"cancelled"`` (Ctrl-C before or while it ran).
+    frames : int
+        Frames tracked.
+    tracks : int
+        Tracks found.
+    fps : float or None
+        Processing speed of its tracking loop (frames per second).
+    seconds : float
+        Wall time of the task on its worker (open, track, write files).
+    error : str or None
+        One-line reason for a failed or cancelled video.
+    """
+
+    video: str
+    out: str
+    status: str = "cancelled"
+    frames: int = 0
+    tracks: int = 0
+    fps: float | None = None
+    seconds: float = 0.0
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True when the video was tracked to its end."""
+        return self.status == "ok"
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready form (one entry of ``batch.json``)."""
+        return asdict(self)
+
+
+# --------------------------------------------------------------------------- naming
+
+
+def _is_url(video: str) -> bool:
+    return bool(_URL.match(video))
+
+
+def normalise_video(video: str | os.PathLike[str]) -> str:
+    """An absolute path for a local video (so remote workers see the same name); URLs unchanged."""
+    text = os.fspath(video)
+    if _is_url(text):
+        return text
+    return str(Path(text).expanduser().absolute())
+
+
+def output_names(videos: Sequence[str | os.PathLike[str]]) -> list[str]:
+    """Folder names for ``videos``: each video's stem, made unique in input order.
+
+    The first ``traffic`` stays ``traffic``; later ones become ``traffic-2``, ``traffic-3``, ...
+    skipping any name already taken (also by a stem that itself ends in ``-2``). Names are
+    compared case-insensitively, so the folders differ on case-insensitive file systems too.
+
+    Examples
+    --------
+    >>> output_names(["a/cam.avi", "b/cam.avi", "cam-2.mp4", "c/cam.mp4"])
+    ['cam', 'cam-2', 'cam-2-2', 'cam-3']
+    """
+    stems = []
+    for video in videos:
+        text = os.fspath(video).rstrip("/\\")
+        stem = re.sub(r"[^\w.-]+", "_", Path(text).stem) if text else ""
+        stems.append(stem.strip(".") or "video")
+    taken: set[str] = set()
+    names: list[str] = []
+    for stem in stems:
+        name, n = stem, 1
+        while name.lower() in taken:
+            n += 1
+            name = f"{stem}-{n}"
+        taken.add(name.lower())
+        names.append(name)
+    return names
+
+
+# --------------------------------------------------------------------------- one video (worker)
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text if isinstance(exc, (ValueError, OSError)) and text else (
+        f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    )
+
+
+def track_video(
+    video: str,
+    out: str,
+    settings: RunSettings,
+    *,
+    fps: float | None = None,
+    max_frames: int | None = None,
+) -> dict[str, Any]:
+    """Track one video into ``out`` exactly as ``mvtrack track`` does; never raises.
+
+    This is the Dask task of :func:`track_many` (it also runs on its own). OpenCV is limited
+    to one thread (``cv2.setNumThreads(1)``): the parallelism is one video per worker.
+
+    Parameters
+    ----------
+    video : str
+        Path or URL, opened with :func:`mvtrack.io.video.open_source`.
+    out : str
+        Output folder (``results.txt``, ``summary.json``, ``trajectories.png``, ``tracks.mp4``).
+    settings : RunSettings
+        As built by ``mvtrack track`` from its options; the size-dependent defaults are filled
+        in here for this video's size (:func:`mvtrack.pipeline.resolve_settings`).
+    fps : float, optional
+        Frame rate to assume instead of the source's.
+    max_frames : int, optional
+        Stop after this many frames.
+
+    Returns
+    -------
+    dict
+        The fields of :class:`BatchItem`. Errors (a missing or unreadable file, a source
+        that breaks off, a bad setting) become ``status="failed"`` with a one-line ``error``;
+        Ctrl-C in the worker becomes ``status="cancelled"`` with the frames done so far.
+    """
+    import cv2
+
+    from mvtrack.io.video import open_source
+    from mvtrack.pipeline import build_detector, build_tracker, resolve_settings, track_to_folder
+
+    cv2.setNumThreads(1)
+    t0 = time.perf_counter()
+    item = BatchItem(video=video, out=out, status="failed")
+    try:
+        src = open_source(video, fps=fps)
+        with src:
+            resolved = resolve_settings(settings, src.size)
+            parts = (build_detector(resolved), build_tracker(resolved, src.fps))
+            run = track_to_folder(
+                (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
+                out=out, max_frames=max_frames, total=src.frame_count, source=video,
+                progress=False, parts=parts, source_error=lambda: src.error,
+            )
+    except KeyboardInterrupt:
+        item.status, item.error = "cancelled", "interrupted before any frame was tracked"
+    except Exception as exc:  # one video's failure must not end the batch
+        item.error = _one_line(exc)
+    else:
+        res, summary = run.result, run.summary
+        item.frames, item.tracks, item.fps = res.n_frames, int(summary["tracks"]), summary["fps"]
+        if res.interrupted:
+            item.status = "cancelled"
+            item.error = f"interrupted after {res.n_frames} frames; results so far are in {out}"
+        elif res.error is not None:
+            item.error = f"{' '.join(res.error.split())}; results so far are in {out}"
+        else:
+            item.status = "ok"
+    item.seconds = round(time.perf_counter() - t0, 3)
+    return item.as_dict()
+
+
+# --------------------------------------------------------------------------- many videos
+
+
+def _finished_on_disk(item: BatchItem, since: float) -> BatchItem | None:
+    """The item of a run whose result did not reach us but whose files did.
+
+    After Ctrl-C a video that was running may still complete before its worker stops; its
+    ``summary.json`` (written last, atomically) then shows a full run newer than ``since``.
+    """
+    import json
+
+    path = Path(item.out) / "summary.json"
+    try:
+        if path.stat().st_mtime < since:
+            return None
+        summary = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if summary.get("ended_early", True) or summary.get("source") != item.video:
+        return None
+    return BatchItem(item.video, item.out, "ok", frames=int(summary["frames"]),
+                     tracks=int(summary["tracks"]), fps=summary.get("fps"),
+                     seconds=float(summary.get("seconds", 0.0)))
+
+
+#: the files :func:`mvtrack.pipeline.track_to_folder` writes (each through a temporary file)
+_OUTPUTS = ("results.txt", "summary.json", "trajectories.png", "tracks.mp4")
+
+
+def _remove_temp_files(folder: Path) -> None:
+    """Delete the temporary files a stopped worker left half-written in ``folder``."""
+    for name in _OUTPUTS:
+        for tmp in folder.glob(f".{glob.escape(name)}.*{Path(name).suffix}"):
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+
+
+def check_settings(settings: RunSettings) -> None:
+    """Build the detector and tracker once, so bad settings fail before any worker starts.
+
+    Raises
+    ------
+    ValueError
+        Unknown preset, predictor, distance, assignment rule, detector or parameter.
+    """
+    from mvtrack.pipeline import (
+        REFERENCE_SIZE,
+        build_detector,
+        build_rescuer,
+        build_tracker,
+        resolve_settings,
+    )
+
+    resolved = resolve_settings(settings, REFERENCE_SIZE)
+    build_detector(resolved)
+    tracker = build_tracker(resolved, 30.0)
+    if resolved.templates:
+        build_rescuer(resolved, tracker)
+
+
+@contextlib.contextmanager
+def _quiet_logs(level: int = logging.ERROR) -> Iterator[None]:
+    """Raise the level of distributed's (and its libraries') loggers for the block."""
+    import distributed  # noqa: F401  (its import sets up its loggers: adjust them afterwards)
+
+    names = {n for n in logging.root.manager.loggerDict if n.startswith(_QUIET_LOGGERS)}
+    loggers = [logging.getLogger(name) for name in sorted(names | set(_QUIET_LOGGERS))]
+    saved = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(max(level, lg.level))
+    try:
+        yield
+    finally:
+        for lg, old in zip(loggers, saved, strict=True):
+            lg.setLevel(old)
+
+
+def _summary(
+    items: list[BatchItem], *, workers: int | None, scheduler: str | None, seconds: float,
+    settings: RunSettings, interrupted: bool,
+) -> dict[str, Any]:
+    counts = {s: sum(it.status == s for it in items) for s in STATUSES}
+    return {
+        "videos": [it.as_dict() for it in items],
+        "total": len(items),
+        **counts,
+        "pending": sum(it.status == "pending" for it in items),
+        "interrupted": interrupted,
+        "workers": workers,
+        "scheduler": scheduler,
+        "seconds": round(seconds, 3),
+        "settings": settings.as_dict(),
+    }
+
+
+def track_many(
+    videos: Sequence[str | os.PathLike[str]],
+    out_root: str | os.PathLike[str],
+    settings: RunSettings | None = None,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    fps: float | None = None,
+    max_frames: int | None = None,
+    progress: bool | None = None,
+    on_result: Callable[[BatchItem], None] | None = None,
+    timeout: float = 10.0,
+) -> list[BatchItem]:
+    """Track every video of ``videos`` in parallel, each into ``out_root/<video stem>/``.
+
+    Parameters
+    ----------
+    videos : sequence of path or str
+        Video files, image folders or stream URLs (anything ``mvtrack track`` opens).
+    out_root : path
+        Folder of the per-video folders (named by :func:`output_names`) and ``batch.json``.
+    settings : RunSettings, optional
+        The same settings for every video (default: ``RunSettings()``, as ``mvtrack track``).
+    workers : int, optional
+        Worker processes of the local cluster (default ``os.cpu_count()``, never more than
+        the number of videos). Only for ``scheduler=None``.
+    scheduler : str, optional
+        Address of a running Dask scheduler (``"tcp://host:port"``). Its workers must import
+        mvtrack and see the videos and ``out_root`` at the same paths (shared file system).
+    fps : float, optional
+        Frame rate to assume instead of each source's.
+    max_frames : int, optional
+        Track at most this many frames of each video.
+    progress : bool, optional
+        Force the progress bar over videos on or off (default: on when stderr is a terminal).
+    on_result : callable, optional
+        Called in this process with each finished :class:`BatchItem`, in completion order.
+    timeout : float
+        Seconds to wait for the connection to ``scheduler``.
+
+    Returns
+    -------
+    list of BatchItem
+        In the order of ``videos``. Ctrl-C (``KeyboardInterrupt`` in this process) cancels the
+        videos not finished, which come back with ``status="cancelled"``; it is not re-raised.
+
+    Raises
+    ------
+    ValueError
+        No videos, ``workers`` < 1, ``workers`` together with ``scheduler``, or bad settings
+        (checked before any worker starts).
+    OSError
+        The scheduler cannot be reached, or ``out_root`` cannot be created.
+    """
+    settings = RunSettings() if settings is None else settings
+    if len(videos) == 0:
+        raise ValueError("track_many: no videos given")
+    if workers is not None and scheduler is not None:
+        raise ValueError("workers applies to a local cluster only; do not give it with scheduler")
+    if workers is not None and workers < 1:
+        raise ValueError(f"workers must be at least 1, got {workers}")
+    if max_frames is not None and max_frames < 1:
+        raise ValueError(f"max_frames must be at least 1, got {max_frames}")
+    check_settings(settings)
+
+    from mvtrack.io.atomic import write_json
+
+    root = Path(out_root).expanduser().absolute()
+    if root.exists() and not root.is_dir():
+        raise ValueError(f"--out {root} is a file, not a folder")
+    sources = [normalise_video(v) for v in videos]
+    outs = [str(root / name) for name in output_names(sources)]
+    items = [BatchItem(v, o, "pending") for v, o in zip(sources, outs, strict=True)]
+    n_workers = min(workers or os.cpu_count() or 1, len(sources))
+    summary_path = root / SUMMARY_NAME
+    t0 = time.perf_counter()
+    started = time.time()
+    interrupted = False
+    begun = False  # the cluster is up and out_root exists: batch.json is written from here on
+
+    def save() -> None:
+        write_json(summary_path, _summary(
+            items, workers=n_workers if scheduler is None else None, scheduler=scheduler,
+            seconds=time.perf_counter() - t0, settings=settings, interrupted=interrupted,
+        ))
+
+    from tqdm import tqdm
+
+    show = sys.stderr.isatty() if progress is None else progress
+    bar = tqdm(total=len(items), desc="videos", unit="video", file=sys.stderr, disable=not show,
+               dynamic_ncols=True)
+    try:
+        with _quiet_logs(), contextlib.ExitStack() as stack:
+            client = _connect(stack, scheduler, n_workers, timeout)
+            from distributed import as_completed
+
+            root.mkdir(parents=True, exist_ok=True)
+            begun = True
+            save()
+            futures = client.map(
+                track_video, sources, outs, settings=settings, fps=fps, max_frames=max_frames,
+                pure=False,
+            )
+            index = {f.key: i for i, f in enumerate(futures)}
+            try:
+                for future in as_completed(futures):
+                    i = index[future.key]
+                    try:
+                        items[i] = BatchItem(**future.result())
+                    except Exception as exc:  # the worker died, or the task could not run
+                        items[i] = BatchItem(sources[i], outs[i], "failed", error=_one_line(exc))
+                    bar.update(1)
+                    save()
+                    if on_result is not None:
+                        on_result(items[i])
+            except KeyboardInterrupt:
+                interrupted = True
+                client.cancel([f for f in futures if not f.done()], force=True)
+                for f in futures:  # keep what finished while we were interrupted
+                    i = index[f.key]
+                    if items[i].status == "pending" and f.status == "finished":
+                        with contextlib.suppress(Exception):
+                            items[i] = BatchItem(**f.result(timeout=1))
+    except KeyboardInterrupt:  # while starting or closing the cluster
+        interrupted = True
+    finally:
+        bar.close()
+        for i, it in enumerate(items):
+            if it.status == "pending":
+                items[i] = _finished_on_disk(it, since=started) or BatchItem(
+                    it.video, it.out, "cancelled", error="cancelled before it finished")
+            if begun and items[i].status == "cancelled" and scheduler is None:
+                _remove_temp_files(Path(items[i].out))  # its worker was stopped mid-write
+        if begun:
+            save()
+    return items
+
+
+@contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Ignore SIGINT for the block (in the main thread; elsewhere do nothing).
+
+    Processes started meanwhile keep SIGINT ignored (an ignored signal stays ignored across
+    ``exec``), so Ctrl-C does not kill the local workers with a traceback each.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _connect(stack: contextlib.ExitStack, scheduler: str | None, n_workers: int,
+             timeout: float) -> Any:
+    """A ``distributed.Client`` on a new local cluster or on ``scheduler``; closed by ``stack``."""
+    from distributed import Client, LocalCluster
+
+    if scheduler is None:
+        # Ctrl-C in a terminal reaches the whole process group; the worker processes inherit
+        # an ignored SIGINT so that only this process handles it (and closes the cluster).
+        with _sigint_ignored():
+            cluster = stack.enter_context(LocalCluster(
+                n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                dashboard_address=None, silence_logs=logging.ERROR,
+                # no dashboard; its health-check HTTP server on a free port, not on 8787
+                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+            ))
+        return stack.enter_context(Client(cluster, timeout=timeout))
+    try:
+        client = Client(scheduler, timeout=timeout)
+    except (OSError, TimeoutError) as exc:
+        raise OSError(f"cannot connect to Dask scheduler {scheduler}: {_one_line(exc)}") from None
+    except ValueError as exc:
+        raise ValueError(f"bad scheduler address {scheduler!r}: {_one_line(exc)}") from None
+    return stack.enter_context(client)

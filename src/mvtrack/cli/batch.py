@@ -1,0 +1,199 @@
+"""``mvtrack batch VIDEO... --out DIR``: track many videos in parallel (Dask), one folder each."""
+
+from __future__ import annotations
+
+import glob
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from mvtrack.cli.track import _GATE_HELP, parse_gate
+
+#: file extensions taken as videos when a folder is given (case-insensitive)
+VIDEO_EXTENSIONS = (
+    ".avi", ".mp4", ".m4v", ".mov", ".mkv", ".mpg", ".mpeg", ".wmv", ".webm", ".flv", ".3gp",
+    ".ts", ".mjpeg", ".mjpg",
+)
+
+_GLOB_CHARS = frozenset("*?[")
+
+
+def _folder_videos(folder: Path) -> list[str]:
+    from mvtrack.io.video import IMAGE_EXTENSIONS
+
+    files = sorted(p for p in folder.iterdir() if p.is_file() and not p.name.startswith("."))
+    videos = [str(p) for p in files if p.suffix.lower() in VIDEO_EXTENSIONS]
+    if videos:
+        return videos
+    if any(p.suffix.lower() in IMAGE_EXTENSIONS for p in files):
+        return [str(folder)]  # an image sequence is one video
+    raise ValueError(f"no videos in folder {folder} (video extensions: "
+                     f"{', '.join(VIDEO_EXTENSIONS)}; or a folder of images)")
+
+
+def expand_videos(args: list[str]) -> list[str]:
+    """The videos named by the command-line arguments, in order, each once.
+
+    An argument is a video file (kept even if missing: the batch reports it as failed), a
+    stream URL, a glob pattern (``"clips/*.avi"``, quoted so the shell leaves it; sorted
+    matches), or a folder: its video files (by :data:`VIDEO_EXTENSIONS`, sorted), or the
+    folder itself when it holds images instead (an image sequence).
+
+    Raises
+    ------
+    ValueError
+        No arguments, a glob with no match, or a folder with no videos.
+    """
+    from mvtrack.batch import normalise_video
+
+    if not args:
+        raise ValueError("no videos given")
+    found: list[str] = []
+    for arg in args:
+        path = Path(arg).expanduser()
+        if "://" not in arg and not path.exists() and _GLOB_CHARS & set(arg):
+            matches = sorted(glob.glob(str(path), recursive=True))
+            if not matches:
+                raise ValueError(f"no file matches {arg!r}")
+            for m in matches:
+                mp = Path(m)
+                found.extend(_folder_videos(mp) if mp.is_dir() else [m])
+        elif path.is_dir():
+            found.extend(_folder_videos(path))
+        else:
+            found.append(arg)
+    seen: set[str] = set()
+    unique = []
+    for video in found:
+        key = normalise_video(video)
+        if key not in seen:
+            seen.add(key)
+            unique.append(video)
+    return unique
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``batch`` command to ``app``."""
+
+    @app.command("batch")
+    def batch_cmd(
+        videos: Annotated[
+            list[str],
+            typer.Argument(
+                metavar="VIDEO...",
+                help="Video files, folders of videos, or quoted glob patterns ('clips/*.mp4')."
+            ),
+        ],
+        out: Annotated[
+            Path, typer.Option(help="Output folder: one sub-folder per video and batch.json.")
+        ],
+        workers: Annotated[
+            int | None,
+            typer.Option(help="Local worker processes (default: the number of CPUs)."),
+        ] = None,
+        scheduler: Annotated[
+            str | None,
+            typer.Option(
+                help="Address of a running Dask scheduler (tcp://host:port) whose workers see "
+                "the videos and --out at the same paths; default: a local cluster."
+            ),
+        ] = None,
+        preset: Annotated[
+            str | None, typer.Option(help="Tracker preset: default, paper1, paper2.")
+        ] = None,
+        predictor: Annotated[
+            str | None, typer.Option(help="kalman-ca, kalman-cv, kalman-coupled, rls, ...")
+        ] = None,
+        gate: Annotated[str | None, typer.Option(help=_GATE_HELP)] = None,
+        distance: Annotated[
+            str | None,
+            typer.Option(help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis, iou"),
+        ] = None,
+        assign: Annotated[str | None, typer.Option(help="nearest, greedy, optimal")] = None,
+        detector: Annotated[
+            str | None, typer.Option(help="disturbance-map (default), frame-diff, mog2")
+        ] = None,
+        config: Annotated[
+            Path | None, typer.Option(help="TOML settings file (see mvtrack.config).")
+        ] = None,
+        no_video: Annotated[
+            bool, typer.Option("--no-video", help="Skip the annotated MP4s (faster).")
+        ] = False,
+        no_templates: Annotated[
+            bool,
+            typer.Option("--no-templates", help="No template matching for stopped vehicles."),
+        ] = False,
+        max_frames: Annotated[
+            int | None, typer.Option(help="Track at most this many frames of each video.")
+        ] = None,
+        fps: Annotated[
+            float | None, typer.Option(help="Frame rate to assume instead of each source's.")
+        ] = None,
+    ) -> None:
+        """Track many videos in parallel, each exactly as `mvtrack track` would, into
+        --out/<video name>/; write --out/batch.json (status, frames, tracks, speed, error per
+        video).
+
+        Exit status 0 when every video succeeded, 1 when some failed (one line each on
+        stderr), 2 for bad usage, 130 after Ctrl-C (pending videos are cancelled).
+        """
+        import dataclasses
+
+        from mvtrack.batch import track_many
+        from mvtrack.config import DETECTORS, RunSettings, load_config
+        from mvtrack.errors import InputError
+
+        if workers is not None and workers < 1:
+            raise ValueError(f"--workers must be at least 1, got {workers}")
+        if workers is not None and scheduler is not None:
+            raise ValueError("--workers sets up a local cluster; do not give it with --scheduler")
+        if max_frames is not None and max_frames < 1:
+            raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
+        if fps is not None and not fps > 0:
+            raise ValueError(f"--fps must be positive, got {fps}")
+        if out.exists() and not out.is_dir():
+            raise ValueError(f"--out {out} is a file, not a folder")
+        sources = expand_videos(videos)
+
+        # the same settings as `mvtrack track` builds from the same options
+        settings = load_config(config) if config is not None else RunSettings()
+        settings = settings.with_overrides(
+            preset=preset, predictor=predictor, gate=parse_gate(gate), distance=distance,
+            assign=assign,
+        )
+        if detector is not None:
+            if detector not in DETECTORS:
+                raise InputError(
+                    f"--detector {detector!r} is not a detector (choose one of: "
+                    f"{', '.join(DETECTORS)})"
+                )
+            params = settings.detector_params if detector == settings.detector else {}
+            settings = dataclasses.replace(settings, detector=detector, detector_params=params)
+        if no_video:
+            settings = dataclasses.replace(settings, video=False)
+        if no_templates:
+            settings = dataclasses.replace(settings, templates=False)
+
+        items = track_many(
+            sources, out, settings, workers=workers, scheduler=scheduler, fps=fps,
+            max_frames=max_frames,
+        )
+        ok = [it for it in items if it.status == "ok"]
+        failed = [it for it in items if it.status == "failed"]
+        cancelled = [it for it in items if it.status == "cancelled"]
+        typer.echo(
+            f"{len(ok)} of {len(items)} videos tracked, {len(failed)} failed"
+            + (f", {len(cancelled)} cancelled" if cancelled else "")
+            + f"; summary in {out / 'batch.json'}"
+        )
+        for it in ok:
+            typer.echo(f"  {it.out}: {it.frames} frames, {it.tracks} tracks, {it.fps} fps")
+        for it in failed:
+            print(f"error: {it.video}: {it.error}", file=sys.stderr)
+        if cancelled:
+            print(f"error: interrupted; {len(cancelled)} videos cancelled", file=sys.stderr)
+            raise typer.Exit(130)
+        if failed:
+            raise typer.Exit(1)

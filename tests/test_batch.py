@@ -1,0 +1,229 @@
+"""``mvtrack batch`` / :func:`mvtrack.batch.track_many`: parallel runs give the results of
+sequential ``mvtrack track`` runs; failures are per video; batch.json; exit codes; Ctrl-C."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from mvtrack.batch import BatchItem, output_names, track_many, track_video
+from mvtrack.cli import main
+from mvtrack.cli.batch import expand_videos
+from mvtrack.config import RunSettings
+from mvtrack.sim.render import write_video
+from mvtrack.sim.scenes import x4_nine_vehicles, x7_crossing
+
+NO_VIDEO = dataclasses.replace(RunSettings(), video=False)
+
+
+def _write_boxes(path: Path, n: int = 30, speed: int = 2) -> Path:
+    """A small MJPG video with one bright box moving right at ``speed`` px per frame."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15, (96, 64))
+    assert writer.isOpened()
+    for k in range(n):
+        img = np.full((64, 96, 3), 80, np.uint8)
+        if k >= 5:
+            x = 6 + speed * (k - 5)
+            img[28:36, x : x + 10] = 230
+        writer.write(img)
+    writer.release()
+    return path
+
+
+@pytest.fixture(scope="module")
+def videos(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Two rendered scenes (nine vehicles, a crossing) that share the stem ``cam`` in
+    different folders, and a box video."""
+    root = tmp_path_factory.mktemp("videos")
+    (root / "a").mkdir()
+    (root / "b").mkdir()
+    scene = x4_nine_vehicles()
+    return {
+        "cam_a": write_video(scene.truncate(40), root / "a" / "cam.mp4", progress=False),
+        "cam_b": write_video(x7_crossing(0).truncate(40), root / "b" / "cam.mp4",
+                             progress=False),
+        "boxes": _write_boxes(root / "boxes.avi"),
+    }
+
+
+@pytest.fixture(scope="module")
+def scheduler() -> str:
+    """The address of a two-worker local Dask cluster shared by the tests of this module."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None, silence_logs=40) as cluster:
+        yield cluster.scheduler_address
+
+
+def _sequential(video: Path, out: Path, *extra: str) -> bytes:
+    assert main(["track", str(video), "--out", str(out), "--no-video", *extra]) == 0
+    return (out / "results.txt").read_bytes()
+
+
+def test_output_names_unique_in_input_order() -> None:
+    names = output_names(["x/cam.avi", "y/cam.avi", "cam-2.mp4", "z/CAM.mp4", "frames/"])
+    assert names == ["cam", "cam-2", "cam-2-2", "CAM-3", "frames"]
+    assert len({n.lower() for n in names}) == len(names)
+
+
+def test_parallel_local_cluster_gives_sequential_results(videos, tmp_path) -> None:
+    order = [videos["cam_a"], videos["boxes"], videos["cam_b"]]
+    items = track_many(order, tmp_path / "batch", NO_VIDEO, workers=2, progress=False)
+
+    assert [it.status for it in items] == ["ok", "ok", "ok"], items
+    assert [Path(it.out).name for it in items] == ["cam", "boxes", "cam-2"]
+    for i, (video, item) in enumerate(zip(order, items, strict=True)):
+        expected = _sequential(video, tmp_path / f"seq{i}")
+        assert (Path(item.out) / "results.txt").read_bytes() == expected, video
+        summary = json.loads((Path(item.out) / "summary.json").read_text())
+        assert (item.frames, item.tracks) == (summary["frames"], summary["tracks"])
+        assert not (Path(item.out) / "tracks.mp4").exists()  # --no-video
+    # the two scenes differ, so equal files above are not a coincidence of one input
+    assert (Path(items[0].out) / "results.txt").read_bytes() != (
+        Path(items[2].out) / "results.txt").read_bytes()
+    assert items[0].frames == 40 and items[0].tracks >= 5
+
+
+def test_missing_video_is_reported_and_others_complete(videos, tmp_path, scheduler) -> None:
+    missing = tmp_path / "nope.mp4"
+    bad = tmp_path / "bad.avi"
+    bad.write_bytes(b"not a video" * 20)
+    done: list[BatchItem] = []
+    items = track_many([videos["boxes"], missing, bad, videos["cam_a"]], tmp_path / "out",
+                       NO_VIDEO, scheduler=scheduler, on_result=done.append)
+
+    assert [it.status for it in items] == ["ok", "failed", "failed", "ok"]
+    assert "nope.mp4" in items[1].error and "does not exist" in items[1].error
+    assert "bad.avi" in items[2].error
+    assert all("\n" not in it.error for it in items[1:3])
+    assert sorted(it.video for it in done) == sorted(it.video for it in items)
+
+    data = json.loads((tmp_path / "out" / "batch.json").read_text())
+    assert (data["total"], data["ok"], data["failed"], data["cancelled"]) == (4, 2, 2, 0)
+    assert data["interrupted"] is False and data["scheduler"] == scheduler
+    assert [v["status"] for v in data["videos"]] == ["ok", "failed", "failed", "ok"]
+    assert data["videos"][1]["error"] == items[1].error
+    good = data["videos"][3]
+    assert set(good) == {"video", "out", "status", "frames", "tracks", "fps", "seconds",
+                         "error"}
+    assert good["frames"] == 40 and good["tracks"] == items[3].tracks
+    assert good["seconds"] > 0 and good["fps"] > 0
+    assert good["video"] == str(videos["cam_a"].absolute())
+    assert data["settings"]["video"] is False
+    assert not (tmp_path / "out" / "nope" / "results.txt").exists()
+    assert [p.name for p in (tmp_path / "out").iterdir() if p.name.startswith(".")] == []
+
+
+def test_interrupt_cancels_pending_and_writes_batch_json(videos, tmp_path, scheduler) -> None:
+    """Ctrl-C (KeyboardInterrupt in the client) after the first finished video."""
+
+    def stop(item: BatchItem) -> None:
+        raise KeyboardInterrupt
+
+    order = [videos["boxes"]] + [videos["cam_a"]] * 1 + [videos["cam_b"]] * 1
+    # six jobs (the same files under different folder names) on two workers
+    many = order + [tmp_path / f"copy{i}" / "cam.mp4" for i in range(3)]
+    for i in range(3):
+        (tmp_path / f"copy{i}").mkdir()
+        (tmp_path / f"copy{i}" / "cam.mp4").write_bytes(videos["cam_a"].read_bytes())
+    items = track_many(many, tmp_path / "out", NO_VIDEO, scheduler=scheduler, on_result=stop)
+
+    statuses = [it.status for it in items]
+    assert set(statuses) <= {"ok", "cancelled"} and "ok" in statuses
+    assert statuses.count("cancelled") >= 2, statuses
+    data = json.loads((tmp_path / "out" / "batch.json").read_text())
+    assert data["interrupted"] is True
+    assert [v["status"] for v in data["videos"]] == statuses
+    assert data["ok"] + data["cancelled"] == 6 and data["pending"] == 0
+    for it in items:
+        if it.status == "ok":
+            assert (Path(it.out) / "results.txt").exists()
+
+
+def test_track_video_never_raises(tmp_path) -> None:
+    out = track_video(str(tmp_path / "gone.avi"), str(tmp_path / "o"), NO_VIDEO)
+    assert out["status"] == "failed" and "gone.avi" in out["error"]
+    ok = track_video(str(_write_boxes(tmp_path / "v.avi")), str(tmp_path / "o2"), NO_VIDEO,
+                     max_frames=12)
+    assert ok["status"] == "ok" and ok["frames"] == 12 and ok["error"] is None
+
+
+def test_expand_videos_folders_globs_and_duplicates(tmp_path) -> None:
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    for name in ("b.mp4", "a.AVI", "notes.txt", ".hidden.mp4"):
+        (clips / name).write_bytes(b"x")
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    (frames / "000.png").write_bytes(b"x")
+    got = expand_videos([str(clips), str(tmp_path / "clips" / "*.mp4"), str(frames),
+                         str(tmp_path / "missing.avi")])
+    assert got == [str(clips / "a.AVI"), str(clips / "b.mp4"), str(frames),
+                   str(tmp_path / "missing.avi")]
+    with pytest.raises(ValueError, match="no file matches"):
+        expand_videos([str(tmp_path / "*.mkv")])
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ValueError, match="no videos in folder"):
+        expand_videos([str(tmp_path / "empty")])
+
+
+def test_cli_exit_codes_and_failure_lines(videos, tmp_path, scheduler, capsys) -> None:
+    out = tmp_path / "ok"
+    code = main(["batch", str(videos["boxes"]), str(videos["cam_a"]), "--out", str(out),
+                 "--scheduler", scheduler, "--no-video", "--max-frames", "20"])
+    assert code == 0, capsys.readouterr().err
+    assert capsys.readouterr().err == ""
+    data = json.loads((out / "batch.json").read_text())
+    assert [v["frames"] for v in data["videos"]] == [20, 20]
+
+    out = tmp_path / "some-failed"
+    code = main(["batch", str(videos["boxes"]), str(tmp_path / "nope.avi"), "--out", str(out),
+                 "--scheduler", scheduler, "--no-video", "--predictor", "rls"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1
+    assert len(err) == 1 and err[0].startswith("error: ") and "nope.avi" in err[0]
+    data = json.loads((out / "batch.json").read_text())
+    assert [v["status"] for v in data["videos"]] == ["ok", "failed"]
+    assert data["settings"]["tracker"]["predictor"] == "rls"
+    # the same options as `mvtrack track` give the same results
+    expected = _sequential(videos["boxes"], tmp_path / "seq", "--predictor", "rls")
+    assert (out / "boxes" / "results.txt").read_bytes() == expected
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        ([], "VIDEO"),
+        (["{empty}"], "no videos in folder"),
+        (["{tmp}/*.mkv"], "no file matches"),
+        (["{video}", "--workers", "0"], "--workers"),
+        (["{video}", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--scheduler"),
+        (["{video}", "--predictor", "psychic"], "psychic"),
+        (["{video}", "--detector", "yolo"], "yolo"),
+        (["{video}", "--out-dir", "x"], "out-dir"),
+    ],
+)
+def test_cli_bad_usage_exits_2_before_any_work(tmp_path, capsys, args, needle) -> None:
+    (tmp_path / "empty").mkdir()
+    video = tmp_path / "v.avi"
+    video.write_bytes(b"x")
+    fmt = {"empty": tmp_path / "empty", "tmp": tmp_path, "video": video}
+    argv = ["batch", *(a.format(**fmt) for a in args), "--out", str(tmp_path / "out")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error:") and needle in err and "\n" not in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_unreachable_scheduler_is_one_line_oserror_and_writes_nothing(tmp_path) -> None:
+    video = _write_boxes(tmp_path / "v.avi", n=8)
+    with pytest.raises(OSError, match=r"cannot connect to Dask scheduler tcp://127\.0\.0\.1:9"):
+        track_many([video], tmp_path / "out", NO_VIDEO, scheduler="tcp://127.0.0.1:9",
+                   timeout=1.0)
+    assert not (tmp_path / "out").exists()
