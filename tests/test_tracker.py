@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.tracking import Tracker, TrackerConfig, TrackLog, paper1, track_detections
+from mvtrack.tracking import (
+    Tracker,
+    TrackerConfig,
+    TrackLog,
+    paper1,
+    paper2,
+    track_detections,
+)
 from mvtrack.types import Detections, TrackState
 
 WH = np.array([[20.0, 15.0]])
@@ -43,9 +50,10 @@ CONFIGS = {
         predictor="kalman-ca", distance="euclidean", gate=400.0, assign="greedy"
     ),
     "rls+uncoupled+optimal": TrackerConfig(predictor="rls", distance="uncoupled", gate=50.0),
-    "coupled+mahalanobis+nearest": TrackerConfig(
-        predictor="kalman-coupled", assign="nearest", gate=30.0
+    "coupled+mahalanobis+optimal": TrackerConfig(
+        predictor="kalman-coupled", distance="mahalanobis", gate=30.0
     ),
+    "paper2 (coupled gate, nearest)": paper2(fps=30.0),
 }
 
 
@@ -70,7 +78,7 @@ def test_gap_is_bridged_by_coasting_with_the_same_id() -> None:
     a = _line([50.0, 50.0], [3.0, 1.0], n)
     a[20:26] = np.nan  # six missed frames (0.2 s at 30 fps; max_coast is 1 s)
     frames = _frames({0: a}, n)
-    log = track_detections(frames, TrackerConfig())
+    log = track_detections(frames, TrackerConfig(confirm_hits=3, max_coast=1.0))
     assert log.track_ids.tolist() == [1]
     for k, tf in enumerate(log):
         if k < 2:
@@ -105,7 +113,8 @@ def test_birth_and_death_at_the_right_frames() -> None:
 
 def test_tentative_tracks_are_output_with_id_minus_one_when_asked() -> None:
     a = _line([10.0, 10.0], [1.0, 0.0], 5)
-    log = track_detections(_frames({0: a}, 5), TrackerConfig(output_tentative=True))
+    config = TrackerConfig(confirm_hits=3, output_tentative=True)
+    log = track_detections(_frames({0: a}, 5), config)
     assert [tf.track_id.tolist() for tf in log] == [[-1], [-1], [1], [1], [1]]
     assert [int(tf.state[0]) for tf in log] == [0, 0, 1, 1, 1]
     assert log.to_mot()[:, 0].tolist() == [3, 4, 5]  # tentative rows are never written

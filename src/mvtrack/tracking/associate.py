@@ -4,21 +4,24 @@ For the distances whose gate is a disc around the prediction — ``euclidean`` (
 paper 2) and ``mahalanobis`` with an isotropic innovation covariance ``S = s I`` (what the
 per-axis filters give, SPEC E2.3) — the tracker gates and assigns here with a small, fixed
 number of array operations per frame. Everything else goes through
-:mod:`mvtrack.association` (the same values; this module is tested against it).
+:mod:`mvtrack.association` (the same values; ``tests/test_tracker_associate.py`` checks this
+module against it).
 
 Gating is dense (an ``N × M`` matrix by broadcasting) for small problems and spatial (a
-KD-tree over detections, pairs within each track's radius) for large ones, so the number of
-pairs and the cost grow near-linearly with ``N``.
+uniform grid of cells one gate radius wide, built by sorting) for large ones, so the number of
+candidate pairs and the cost grow near-linearly with ``N``.
 
-The ``optimal`` rule is the gated global nearest neighbour of
-:func:`mvtrack.association.assign` (maximum number of gated pairs, then minimum total
-cost), solved in three tiers:
+The ``optimal`` rule minimises the total cost of the matched gated pairs plus a penalty
+``u/2`` for every track and every detection left unmatched — the rule of
+:func:`mvtrack.association.assign` with ``unmatched_cost=u``; the tracker uses ``u = 2 ×
+gate``, so any gated pair is worth matching on its own, and only chains of re-assignments
+that cost more than they gain are refused. It is solved in tiers:
 
 1. *stars* — components of the gate graph with one track or one detection (isolated pairs
-   included; most of them in sparse scenes) are solved by a vectorised minimum;
-2. the remaining *conflict* pairs, when few, by one ``linear_sum_assignment`` on their compact
-   dense matrix (the components are independent, so one solve of their union is exact);
-3. otherwise one ``linear_sum_assignment`` per connected component.
+   included; most pairs in sparse scenes): the cheapest pair, vectorised;
+2. the remaining *conflict* pairs: one dense ``linear_sum_assignment`` on their compact matrix
+   when it is small, else one sparse LAPJVsp solve
+   (:func:`scipy.sparse.csgraph.min_weight_full_bipartite_matching`) of all of them.
 """
 
 from __future__ import annotations
@@ -26,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
-from scipy.sparse import coo_array
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import min_weight_full_bipartite_matching
 from scipy.spatial import cKDTree
 
 FloatArray = NDArray[np.float64]
@@ -38,9 +41,11 @@ DENSE_PAIRS = 20_000
 #: up to this many track × detection pairs one dense assignment solves the whole frame
 DENSE_LSA = 2_500
 #: up to this many cells the conflict pairs are solved in one dense assignment
-DENSE_CONFLICT = 40_000
+DENSE_CONFLICT = 10_000
 
 _EMPTY = np.zeros(0, dtype=np.intp)
+#: the 3 × 3 block of grid cells around a cell
+_NEIGHBOURS = np.array([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=np.int64)
 
 
 def gate_pairs(
@@ -50,8 +55,7 @@ def gate_pairs(
 
     ``scale`` is ``None`` for the Euclidean distance (eq. (8) of paper 2, cost in px²) and the
     innovation variance ``s_i`` (N,) for the Mahalanobis distance with ``S_i = s_i I``
-    (cost χ²-distributed with 2 degrees of freedom). Pairs come sorted by track, then
-    detection.
+    (cost χ²-distributed with 2 degrees of freedom).
     """
     n, m = txy.shape[0], dxy.shape[0]
     if n == 0 or m == 0:
@@ -65,13 +69,66 @@ def gate_pairs(
         ti, dj = np.nonzero(cost <= gate)
         return ti, dj, cost[ti, dj]
     radius = np.sqrt(gate * scale) if scale is not None else np.full(n, np.sqrt(gate))
-    ti, dj = _spatial_pairs(txy, dxy, radius)
+    ti, dj = spatial_pairs(txy, dxy, radius)
     d = dxy[dj] - txy[ti]
-    cost = np.einsum("pi,pi->p", d, d)
+    cost = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]
     if scale is not None:
         cost /= scale[ti]
     keep = cost <= gate
     return ti[keep], dj[keep], cost[keep]
+
+
+def spatial_pairs(
+    txy: FloatArray, dxy: FloatArray, radius: FloatArray
+) -> tuple[IntArray, IntArray]:
+    """Candidate pairs: every detection within ``radius_i`` of track ``i`` (and a few more).
+
+    Detections are sorted into square cells of side ``c`` (the largest radius up to 1.25
+    times the median); each track with ``radius_i <= c`` looks at the 3 × 3 cells around its
+    own, found by binary search in the sorted cell keys, so the work is proportional to the
+    number of tracks and candidate pairs. The few tracks with a wider gate (long coasting)
+    are queried in a KD-tree. The caller filters the pairs by their exact distance.
+    """
+    finite = np.isfinite(radius)
+    ref = 1.25 * float(np.median(radius[finite])) if finite.any() else 1.0
+    cell = max(float(radius[radius <= ref].max(initial=0.0)), 1e-6)
+    lo = np.minimum(txy.min(axis=0), dxy.min(axis=0))
+    dc = ((dxy - lo) // cell).astype(np.int64)
+    width = int(max(dc[:, 0].max(), ((txy[:, 0] - lo[0]) // cell).max())) + 3
+    dkey = (dc[:, 1] + 1) * width + dc[:, 0] + 1
+    order = np.argsort(dkey, kind="stable")
+    narrow = np.flatnonzero(radius <= cell)
+    tc = ((txy[narrow] - lo) // cell).astype(np.int64) + 1
+    keys = ((tc[:, 1, None] + _NEIGHBOURS[:, 1]) * width + tc[:, 0, None] + _NEIGHBOURS[:, 0])
+    keys = keys.ravel()
+    n_cells = int(max(dkey.max(), keys.max())) + 2
+    if n_cells <= 8 * (keys.size + dkey.size) + 4096:  # a table of cell starts
+        first = np.zeros(n_cells + 1, dtype=np.int64)
+        np.cumsum(np.bincount(dkey, minlength=n_cells), out=first[1:])
+        keys = np.maximum(keys, 0)
+        start = first[keys]
+        count = first[keys + 1] - start
+    else:  # sparse extent (an outlier far away): binary search in the sorted keys
+        skey = dkey[order]
+        start = np.searchsorted(skey, keys, side="left")
+        count = np.searchsorted(skey, keys, side="right") - start
+    total = int(count.sum())
+    ti = np.repeat(np.repeat(narrow, 9), count)
+    # positions start[r], start[r] + 1, ... for every (track, cell) run r
+    run_start = np.repeat(start - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
+    dj = order[run_start + np.arange(total)]
+    wide = np.flatnonzero(~(radius <= cell))
+    if wide.size:
+        tree = cKDTree(dxy)
+        r = np.where(np.isfinite(radius[wide]), radius[wide], np.inf)
+        balls = tree.query_ball_point(txy[wide], np.minimum(r, 1e12))
+        counts = np.fromiter((len(b) for b in balls), dtype=np.intp, count=wide.size)
+        ti = np.concatenate([ti, np.repeat(wide, counts)])
+        dj = np.concatenate(
+            [dj, np.fromiter((j for b in balls for j in b), dtype=np.intp,
+                             count=int(counts.sum()))]
+        )
+    return ti.astype(np.intp), dj.astype(np.intp)
 
 
 def dense_optimal(
@@ -79,50 +136,21 @@ def dense_optimal(
 ) -> tuple[IntArray, IntArray]:
     """Gate and solve a small problem in one dense ``linear_sum_assignment``.
 
-    Same result as :func:`gate_pairs` followed by :func:`optimal`: forbidden cells cost more
-    than any set of gated pairs together, so the solver first maximises the number of gated
-    pairs, then minimises their cost. Returns matched (track, detection) rows, by track.
+    Same result as :func:`gate_pairs` followed by :func:`optimal` with ``half_u = gate``: a
+    forbidden cell costs ``u = 2 gate``, i.e. leaving both its track and its detection
+    unmatched, which makes the rectangular problem equivalent to the penalised one (up to a
+    constant). Returns matched (track, detection) rows.
     """
     dx = dxy[:, 0] - txy[:, 0, None]
     dy = dxy[:, 1] - txy[:, 1, None]
     cost = dx * dx + dy * dy  # eq. (8) of paper 2, squared
     if scale is not None:
         cost /= scale[:, None]  # Δᵀ S⁻¹ Δ with S = s I
-    big = 2.0 * gate * (min(cost.shape) + 1) + 1.0
-    cost[~(cost <= gate)] = big  # NaN never passes
+    u = 2.0 * gate
+    cost[~(cost <= gate)] = u  # NaN never passes
     rows, cols = linear_sum_assignment(cost)
-    keep = cost[rows, cols] < big
+    keep = cost[rows, cols] < u
     return rows[keep], cols[keep]
-
-
-def _spatial_pairs(txy: FloatArray, dxy: FloatArray, radius: FloatArray) -> tuple[IntArray, ...]:
-    """Pairs with ``|d − t| <= radius_t`` via KD-trees, sorted by track then detection.
-
-    Tracks within twice the median radius share one tree-against-tree query; the few with a
-    wider gate (long coasting) are queried ball by ball, so they do not widen everyone's.
-    """
-    dtree = cKDTree(dxy)
-    ref = 2.0 * float(np.median(radius))
-    common = radius <= ref
-    parts_t, parts_d = [], []
-    idx = np.flatnonzero(common)
-    if idx.size:
-        ttree = cKDTree(txy[idx])
-        sdm = ttree.sparse_distance_matrix(dtree, float(radius[idx].max()), p=2.0,
-                                           output_type="ndarray")
-        parts_t.append(idx[sdm["i"]])
-        parts_d.append(sdm["j"].astype(np.intp))
-    wide = np.flatnonzero(~common)
-    if wide.size:
-        balls = dtree.query_ball_point(txy[wide], radius[wide])
-        counts = np.fromiter((len(b) for b in balls), dtype=np.intp, count=wide.size)
-        parts_t.append(np.repeat(wide, counts))
-        parts_d.append(np.fromiter((j for b in balls for j in b), dtype=np.intp,
-                                   count=int(counts.sum())))
-    ti = np.concatenate(parts_t) if len(parts_t) > 1 else parts_t[0]
-    dj = np.concatenate(parts_d) if len(parts_d) > 1 else parts_d[0]
-    order = np.lexsort((dj, ti))
-    return ti[order], dj[order]
 
 
 def _first_of_runs(key: IntArray) -> NDArray[np.bool_]:
@@ -138,70 +166,63 @@ def _min_per(key: IntArray, cost: FloatArray, other: IntArray, sel: IntArray) ->
 
 
 def optimal(
-    ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int
+    ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, half_u: float
 ) -> tuple[IntArray, IntArray]:
-    """Gated global nearest neighbour: matched (track, detection) rows, sorted by track.
+    """Minimum of Σ cost(matched pairs) + ``half_u`` × (unmatched tracks + detections).
 
-    Maximises the number of matched gated pairs, then minimises their total cost (the default
-    ``optimal`` rule of :func:`mvtrack.association.assign`).
+    ``ti, dj, cost`` are the gated pairs (each pair at most once, ``cost < 2 half_u``); ``n``
+    tracks and ``m`` detections. Returns the matched (track, detection) rows.
     """
-    p = ti.shape[0]
-    if p == 0:
+    if ti.shape[0] == 0:
         return _EMPTY, _EMPTY
     deg_t = np.bincount(ti, minlength=n)
     deg_d = np.bincount(dj, minlength=m)
     # a track all of whose detections are its alone is the centre of a star component
-    shared_d = deg_d[dj] > 1
-    t_conf = np.bincount(ti, weights=shared_d, minlength=n) > 0
-    shared_t = deg_t[ti] > 1
-    d_conf = np.bincount(dj, weights=shared_t, minlength=m) > 0
+    t_conf = np.bincount(ti, weights=deg_d[dj] > 1, minlength=n) > 0
+    d_conf = np.bincount(dj, weights=deg_t[ti] > 1, minlength=m) > 0
     t_star = ~t_conf[ti]  # pairs of components with one track (or 1-1)
     d_star = ~d_conf[dj] & ~t_star  # components with one detection and several tracks
     parts = []
-    sel = np.flatnonzero(t_star)
-    if sel.size:
-        parts.append(_min_per(ti, cost, dj, sel))
-    sel = np.flatnonzero(d_star)
-    if sel.size:
-        parts.append(_min_per(dj, cost, ti, sel))
-    hard = np.flatnonzero(~t_star & ~d_star)
+    if t_star.any():
+        parts.append(_min_per(ti, cost, dj, np.flatnonzero(t_star)))
+    if d_star.any():
+        parts.append(_min_per(dj, cost, ti, np.flatnonzero(d_star)))
+    hard = np.flatnonzero(~(t_star | d_star))
     if hard.size:
-        parts.append(_solve_conflicts(ti, dj, cost, hard))
+        parts.append(hard[_solve_conflicts(ti[hard], dj[hard], cost[hard], half_u)])
     chosen = np.concatenate(parts) if len(parts) > 1 else parts[0]
-    chosen = chosen[np.argsort(ti[chosen], kind="stable")]
     return ti[chosen], dj[chosen]
 
 
-def _dense_lsa(t: IntArray, d: IntArray, c: FloatArray) -> IntArray:
-    """Positions (into ``t``) of the pairs chosen by one gated dense assignment."""
+def _solve_conflicts(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> IntArray:
+    """Positions (into ``t``) of the optimal pairs of the conflict components."""
     ut, lt = np.unique(t, return_inverse=True)
     ud, ld = np.unique(d, return_inverse=True)
-    big = 2.0 * float(np.abs(c).sum()) + 1.0  # a forbidden cell costs more than all pairs
-    a = np.full((ut.size, ud.size), big)
-    a[lt, ld] = c
-    rows, cols = linear_sum_assignment(a)
-    pos = np.full((ut.size, ud.size), -1, dtype=np.intp)
-    pos[lt, ld] = np.arange(t.size)
-    got = pos[rows, cols]
-    return got[got >= 0]
-
-
-def _solve_conflicts(ti: IntArray, dj: IntArray, cost: FloatArray, hard: IntArray) -> IntArray:
-    t, d, c = ti[hard], dj[hard], cost[hard]
-    nt = np.unique(t).size
-    nd = np.unique(d).size
+    nt, nd = ut.size, ud.size
+    p = t.size
     if nt * nd <= DENSE_CONFLICT:
-        return hard[_dense_lsa(t, d, c)]
-    # one assignment per connected component of the conflict graph
-    _, lt = np.unique(t, return_inverse=True)
-    _, ld = np.unique(d, return_inverse=True)
-    g = coo_array((np.ones(t.size), (lt, nt + ld)), shape=(nt + nd, nt + nd))
-    _, labels = connected_components(g, directed=False)
-    lab = labels[lt]
-    order = np.argsort(lab, kind="stable")
-    bounds = np.flatnonzero(_first_of_runs(lab[order]))
-    out = []
-    for s, e in zip(bounds, [*bounds[1:], order.size], strict=True):
-        idx = order[s:e]
-        out.append(idx[_dense_lsa(t[idx], d[idx], c[idx])])
-    return hard[np.concatenate(out)]
+        a = np.full((nt, nd), 2.0 * half_u)  # forbidden = leave both unmatched
+        a[lt, ld] = c
+        pos = np.full((nt, nd), -1, dtype=np.intp)
+        pos[lt, ld] = np.arange(p)
+        rows, cols = linear_sum_assignment(a)
+        got = pos[rows, cols]
+        return got[got >= 0]
+    # one sparse solve: rows = tracks, then one dummy per detection; columns = detections,
+    # then one dummy per track. Track → its dummy and dummy → detection cost u/2 (unmatched);
+    # dummies pair freely (0) on the transposed pattern so a perfect matching always exists.
+    # A constant offset keeps every weight positive (it adds the same to every matching).
+    off = 1.0
+    at, ad = np.arange(nt), np.arange(nd)
+    rows = np.concatenate([lt, at, nt + ad, nt + ld])
+    cols = np.concatenate([ld, nd + at, ad, nd + lt])
+    w = np.concatenate(
+        [c + off, np.full(nt, half_u + off), np.full(nd, half_u + off), np.full(p, off)]
+    )
+    g = csr_array((w, (rows, cols)), shape=(nt + nd, nd + nt))
+    r, k = min_weight_full_bipartite_matching(g)
+    real = (r < nt) & (k < nd)
+    key = lt.astype(np.int64) * nd + ld
+    order = np.argsort(key)
+    hit = np.searchsorted(key[order], r[real].astype(np.int64) * nd + k[real])
+    return order[hit]

@@ -25,8 +25,11 @@ class FrameParams:
     max_misses: int  #: consecutive frames a confirmed track may coast; deleted on the next
     tentative_max_misses: int  #: consecutive misses a tentative track survives
     warmup_hits: int  #: associations during which the paper-1 gate centre is used (0 = off)
+    r: float | None  #: measurement variance, px²
     init_velocity_std: float | None  #: prior std of the velocity of a new track, px/frame
     accel_std: float | None  #: white-acceleration std, px/frame² (None = predictor default)
+    recover_speed: float | None  #: recovery radius growth, px/frame (None = no recovery)
+    recover_window: int  #: frames since the last measurement within which recovery is tried
 
 
 @dataclass(frozen=True)
@@ -53,7 +56,9 @@ class TrackerConfig:
         ``unmatched_cost`` for ``optimal``).
     gate : float or None
         Gate on the distance's squared value (px² for ``euclidean``, χ² for Mahalanobis-type
-        distances, 1 − IoU for ``iou``); ``None`` uses the distance's default.
+        distances, 1 − IoU for ``iou``); ``None`` uses the distance's default. The default,
+        100 px², is a 10 px circle for the default ``euclidean`` distance; set ``gate=None``
+        (or a value in the new units) when changing the distance.
     fps : float
         Frame rate of the input, used to convert the time-based parameters below.
     confirm_hits : int
@@ -66,11 +71,37 @@ class TrackerConfig:
     tentative_max_coast : float
         Seconds a tentative track may go without detection before it is deleted (0: the first
         miss deletes it).
+    measurement_std : float or None
+        Std of the detection centres in pixels; the predictors' ``r = measurement_std²``
+        (None: the predictor's default). ``predictor_params["r"]`` wins over it.
     init_velocity_std : float or None
-        Prior std of a new track's velocity, px/s (None: the predictor's default).
+        Prior std of a new track's velocity, px/s; the predictors' ``vel_var =
+        (init_velocity_std / fps)²`` (None: the predictor's default).
     accel_std : float or None
-        White-acceleration std of the motion model, px/s² (None: the predictor's default).
-        Converted to ``q = (accel_std / fps²)²`` in px²/frame⁴ for the Kalman predictors.
+        White-acceleration std of the constant-velocity models (``kalman-cv``,
+        ``kalman-coupled``), px/s²; converted to ``q = (accel_std / fps²)²`` in px²/frame⁴
+        (None: the predictor's default). ``kalman-ca`` and ``rls`` take their own ``q`` /
+        parameters through ``predictor_params``.
+    second_gate : float or None
+        Pixels. A second association stage: tracks left unmatched by the first (the
+        configured distance and gate) may take a detection left unassigned within this
+        Euclidean radius of their prediction (gated global nearest neighbour); ``None``
+        disables it. A tight first gate plus a wide second one keeps the assignment
+        problems small in dense scenes and still follows manoeuvring targets.
+    recover_speed : float or None
+        Px/s. Second association stage for confirmed tracks that found no detection inside
+        their gate: such a track may take an unassigned detection within
+        ``recover_speed × (time since its last measurement) + recover_margin`` of its *last
+        measurement* (not of the prediction), so a target that turned sharply (or bounced) is
+        re-acquired with its ID instead of being born again; its predictor restarts at that
+        detection (zero velocity, the ``init_velocity_std`` prior). ``None`` disables it.
+    recover_margin : float
+        Pixels added to the recovery radius (measurement noise).
+    recover_window : float
+        Seconds since the last measurement after which a track can no longer be recovered
+        (so clutter far away cannot keep a lost track alive).
+    recover_min_hits : int
+        Associations a track needs before it can be recovered (established tracks only).
     warmup : bool
         Paper 1's warm-up (SPEC §1.1 [R]): until a track has ``warmup_hits`` associations its
         gate centre is ``2 y_k − y_{k−1}`` (``y_k`` after one association), whatever the
@@ -86,18 +117,24 @@ class TrackerConfig:
 
     predictor: str = "kalman-cv"
     predictor_params: Mapping[str, Any] = field(default_factory=dict)
-    distance: str = "mahalanobis"
+    distance: str = "euclidean"
     distance_params: Mapping[str, Any] = field(default_factory=dict)
     assign: str = "optimal"
     assign_params: Mapping[str, Any] = field(default_factory=dict)
-    gate: float | None = None
+    gate: float | None = 100.0
     fps: float = 30.0
-    confirm_hits: int = 3
+    confirm_hits: int = 2
     confirm_window: float | None = None
-    max_coast: float = 1.0
+    max_coast: float = 0.3
     tentative_max_coast: float = 0.0
-    init_velocity_std: float | None = None
-    accel_std: float | None = None
+    measurement_std: float | None = 2.0
+    init_velocity_std: float | None = 150.0
+    accel_std: float | None = 500.0
+    second_gate: float | None = 20.0
+    recover_speed: float | None = 250.0
+    recover_margin: float = 6.0
+    recover_window: float = 0.3
+    recover_min_hits: int = 5
     warmup: bool = False
     warmup_hits: int = 6
     output_tentative: bool = False
@@ -124,7 +161,16 @@ class TrackerConfig:
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
                 raise bad(name, "must be a finite number of seconds >= 0")
-        for name in ("init_velocity_std", "accel_std"):
+        m = self.recover_margin
+        if not isinstance(m, (int, float)) or not math.isfinite(m) or m < 0:
+            raise bad("recover_margin", "must be a finite number of pixels >= 0")
+        if not isinstance(self.recover_min_hits, int) or self.recover_min_hits < 1:
+            raise bad("recover_min_hits", "must be an integer >= 1")
+        if not _finite_positive(self.recover_window):
+            raise bad("recover_window", "must be a finite number of seconds > 0")
+        for name in (
+            "measurement_std", "init_velocity_std", "accel_std", "recover_speed", "second_gate"
+        ):
             value = getattr(self, name)
             if value is not None and not _finite_positive(value):
                 raise bad(name, "must be a finite number > 0 or None")
@@ -151,10 +197,13 @@ class TrackerConfig:
             max_misses=_round(self.max_coast * fps),
             tentative_max_misses=_round(self.tentative_max_coast * fps),
             warmup_hits=self.warmup_hits if self.warmup else 0,
+            r=None if self.measurement_std is None else self.measurement_std**2,
             init_velocity_std=(
                 None if self.init_velocity_std is None else self.init_velocity_std / fps
             ),
             accel_std=None if self.accel_std is None else self.accel_std / fps**2,
+            recover_speed=None if self.recover_speed is None else self.recover_speed / fps,
+            recover_window=max(1, _round(self.recover_window * fps)),
         )
 
     def replace(self, **changes: Any) -> TrackerConfig:
@@ -171,6 +220,19 @@ def _round(x: float) -> int:
     return math.floor(x + 0.5 + 1e-9)
 
 
+#: what both paper presets share: R = 4 px² (SPEC §2.1 [R]), the predictors' own priors, no
+#: recovery stage, paper 1's warm-up gate centre until 2M = 6 associations
+_PAPER_COMMON: dict[str, Any] = {
+    "measurement_std": 2.0,
+    "init_velocity_std": None,
+    "accel_std": None,
+    "recover_speed": None,
+    "second_gate": None,
+    "warmup": True,
+    "warmup_hits": 6,
+}
+
+
 def paper1(predictor: str = "kalman-ca", fps: float = 30.0, gate_px: float = 20.0) -> TrackerConfig:
     """Paper 1's system (SPEC §1.1): per-axis CA Kalman or RLS, 20 px circle, nearest.
 
@@ -178,20 +240,22 @@ def paper1(predictor: str = "kalman-ca", fps: float = 30.0, gate_px: float = 20.
     synthetic experiment), unused detections start tracks at once (every started track is
     counted, so ``confirm_hits = 1``), a track ends after 3 consecutive frames without a
     detection (it coasts meanwhile), and the warm-up gate centre ``2 y_k − y_{k−1}`` is used
-    until a track has 2M = 6 associations.
+    until a track has 2M = 6 associations. R = 4 px² and, for the CA filter, q = 0.05
+    (SPEC §2.1 [R]; paper 1's own 5 and 0.5 are in metres for its 1-D simulation, E1.7).
     """
     if predictor not in ("kalman-ca", "rls"):
         raise ValueError(f"paper1: predictor must be 'kalman-ca' or 'rls' (got {predictor!r})")
+    params = {"q": 0.05} if predictor == "kalman-ca" else {}
     return TrackerConfig(
         predictor=predictor,
+        predictor_params=params,
         distance="euclidean",
         gate=float(gate_px) ** 2,
         assign="nearest",
         fps=fps,
         confirm_hits=1,
         max_coast=3 / fps,
-        warmup=True,
-        warmup_hits=6,
+        **_PAPER_COMMON,
     )
 
 
@@ -204,19 +268,25 @@ def paper2(distance: str = "coupled", fps: float = 15.0) -> TrackerConfig:
     """
     return TrackerConfig(
         predictor="kalman-ca",
-        predictor_params={"r": 4.0, "q": 0.05},
+        predictor_params={"q": 0.05},
         distance=distance,
+        gate=None,
         assign="nearest",
         fps=fps,
         confirm_hits=1,
         max_coast=3 / fps,
-        warmup=True,
-        warmup_hits=6,
+        **_PAPER_COMMON,
     )
 
 
 def default(fps: float = 30.0) -> TrackerConfig:
-    """The modern default (chosen by the crowd benchmark, docs/bench/tracker.md)."""
+    """The modern default, ``TrackerConfig(fps=fps)`` (chosen by the crowd benchmark,
+    docs/bench/tracker.md): closed-form per-axis constant-velocity KF (σ_z = 2 px,
+    σ_a = 500 px/s², velocity prior 150 px/s); association in stages, each the gated global
+    nearest neighbour (``optimal``): a 10 px Euclidean gate, then 20 px for the tracks and
+    detections left over, then the recovery stage (250 px/s from the last measurement) for
+    established targets that turned or bounced; confirmation on 2 consecutive hits and
+    0.3 s of coasting."""
     return TrackerConfig(fps=fps)
 
 
@@ -237,5 +307,7 @@ def preset(name: str, **overrides: Any) -> TrackerConfig:
             f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}"
         ) from None
     fps = overrides.pop("fps", None)
+    if "distance" in overrides and "gate" not in overrides:
+        overrides["gate"] = None  # the new distance's own default gate
     config = build() if fps is None else build(fps=fps)
     return config.replace(**overrides) if overrides else config

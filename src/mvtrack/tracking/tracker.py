@@ -18,6 +18,7 @@ and §2.1 steps 3–5 (paper 2):
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -155,6 +156,18 @@ def _take_state(state: Any, idx: NDArray[np.intp]) -> Any:
     return _batch.take(state, idx)
 
 
+def _put_state(state: Any, idx: NDArray[np.intp], new: Any) -> Any:
+    """A copy of the batch ``state`` with rows ``idx`` replaced by the rows of ``new``."""
+    changes = {}
+    for f in dataclasses.fields(state):
+        a = getattr(state, f.name)
+        if isinstance(a, np.ndarray) and a.ndim >= 1:
+            a = a.copy()
+            a[idx] = getattr(new, f.name)
+            changes[f.name] = a
+    return dataclasses.replace(state, **changes)
+
+
 def _concat_state(a: Any, b: Any) -> Any:
     if type(a) is CVState:
         return CVState(np.concatenate([a.x, b.x]), np.concatenate([a.P, b.P]))
@@ -174,7 +187,12 @@ def _predictor_params(config: TrackerConfig) -> dict[str, Any]:
     """Predictor keyword arguments: the user's, plus the physical priors converted to frames."""
     params = dict(config.predictor_params)
     fp = config.frames()
-    if fp.accel_std is not None and config.predictor.startswith("kalman"):
+    if fp.r is not None:
+        params.setdefault("r", fp.r)  # px²
+    cv = config.predictor == "kalman-cv" or (
+        config.predictor == "kalman-coupled" and params.get("kind", "cv") == "cv"
+    )
+    if fp.accel_std is not None and cv:
         params.setdefault("q", fp.accel_std**2)  # px²/frame⁴
     if fp.init_velocity_std is not None:
         params.setdefault("vel_var", fp.init_velocity_std**2)  # px²/frame²
@@ -288,6 +306,24 @@ class Tracker:
                 mt, md, ud = self._associate(ps, gxy, tab, dets)
             det_index = np.full(n, -1, dtype=np.int64)
             det_index[mt] = md
+            if self.config.second_gate is not None and ud.size and mt.size < n:
+                mt2, md2 = self._second_stage(gxy, det_index, dets, ud)
+                if mt2.size:
+                    det_index[mt2] = md2
+                    mt, md = np.concatenate([mt, mt2]), np.concatenate([md, md2])
+                    used = np.zeros(m, dtype=bool)
+                    used[md2] = True
+                    ud = ud[~used[ud]]
+            recovered = None
+            if self._fp.recover_speed is not None and ud.size:
+                mt2, md2 = self._recover(tab, det_index, dets, ud, k)
+                if mt2.size:
+                    det_index[mt2] = md2
+                    mt, md = np.concatenate([mt, mt2]), np.concatenate([md, md2])
+                    used = np.zeros(m, dtype=bool)
+                    used[md2] = True
+                    ud = ud[~used[ud]]
+                    recovered = mt2
             z = np.full((n, 2), np.nan)
             z[mt] = dets.xy[md]
             matched = det_index >= 0
@@ -299,6 +335,8 @@ class Tracker:
                     held = matched | rescued
                     hi = np.flatnonzero(held)
             ps = pred.update(ps, z, held)  # measurement update, eqs. (3)–(5) of paper 1
+            if recovered is not None:  # restart the predictor at the re-acquired detection
+                ps = _put_state(ps, recovered, pred.init(z[recovered]))
             ints, flo = tab.ints.copy(), tab.floats.copy()
             count_hits(ints, matched, hi)
             ints[hi, PREV_K] = ints[hi, LAST_K]
@@ -372,7 +410,7 @@ class Tracker:
             mt, md = fast_assoc.dense_optimal(gxy, dets.xy, scale, self._gate)
         elif rule == "optimal" and not self._assign_params:
             ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate)
-            mt, md = fast_assoc.optimal(ti, dj, cost, n, m)
+            mt, md = fast_assoc.optimal(ti, dj, cost, n, m, self._gate)
         else:
             ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate)
             a = assign_pairs(ti, dj, cost, n, m, rule, **self._assign_params)
@@ -380,6 +418,48 @@ class Tracker:
         used = np.zeros(m, dtype=bool)
         used[md] = True
         return mt, md, np.flatnonzero(~used)
+
+    def _second_stage(
+        self, gxy: FloatArray, det_index: IntArray, dets: Detections, ud: NDArray[np.intp]
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """Second association stage: the tracks left unmatched by the first stage against the
+        detections left unassigned, with the wider Euclidean gate ``second_gate`` (px) around
+        the prediction (gated global nearest neighbour on the squared distance)."""
+        cand = np.flatnonzero(det_index < 0)
+        g = float(self.config.second_gate) ** 2
+        ti, dj, cost = fast_assoc.gate_pairs(gxy[cand], dets.xy[ud], None, g)
+        if ti.size == 0:
+            return _EMPTY, _EMPTY
+        mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, g)
+        return cand[mt], ud[md]
+
+    def _recover(
+        self, tab: TrackTable, det_index: IntArray, dets: Detections, ud: NDArray[np.intp],
+        k: int,
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """Second association stage: lost confirmed tracks vs unassigned detections.
+
+        A confirmed (or coasting, or stopped) track with at least ``recover_min_hits``
+        associations, measured within the last ``recover_window``, that has no detection in
+        its gate may take an unassigned detection within ``r = v_max Δk + margin`` of its last
+        measurement, Δk the frames since that measurement; pairs are chosen by the gated
+        global nearest neighbour on ``|z − y_last|² / r²``. Returns the recovered track rows
+        and their detections.
+        """
+        cand = np.flatnonzero(
+            (det_index < 0)
+            & (tab.state != TENTATIVE)
+            & (tab.hits >= self.config.recover_min_hits)
+            & (tab.last_k >= k - self._fp.recover_window)
+        )
+        if cand.size == 0:
+            return _EMPTY, _EMPTY
+        radius = self._fp.recover_speed * (k - tab.last_k[cand]) + self.config.recover_margin
+        ti, dj, cost = fast_assoc.gate_pairs(tab.last_xy[cand], dets.xy[ud], radius**2, 1.0)
+        if ti.size == 0:
+            return _EMPTY, _EMPTY
+        mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
+        return cand[mt], ud[md]
 
     def _warmup_centre(self, tab: TrackTable, pxy: FloatArray, k: int) -> FloatArray:
         """Paper 1's warm-up gate centre (SPEC §1.1 [R]).

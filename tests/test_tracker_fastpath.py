@@ -1,0 +1,133 @@
+"""The tracker's fast paths equal the general code they replace.
+
+- :class:`FastCVPredictor` (closed-form per-axis CV Kalman) against ``kalman-cv`` of
+  :mod:`mvtrack.filters.predictors` (batched matrix Kalman filter, Joseph form).
+- :mod:`mvtrack.tracking.associate` against :mod:`mvtrack.association` (gating values and the
+  penalised optimal assignment), and against brute force on tiny problems.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from mvtrack.association import TrackView, assign, candidate_pairs
+from mvtrack.filters.predictors import make_predictor
+from mvtrack.tracking import associate as fa
+from mvtrack.tracking.fastkf import FastCVPredictor
+
+
+@pytest.mark.parametrize("params", [{}, {"q": 0.3, "r": 4.0, "vel_var": 9.0}])
+def test_fast_cv_equals_the_general_kalman_cv_over_a_random_run(params: dict) -> None:
+    rng = np.random.default_rng(5)
+    fast = FastCVPredictor(**params)
+    ref = make_predictor("kalman-cv", **params)
+    xy0 = rng.uniform(0, 500, (6, 2))
+    a, b = fast.init(xy0), ref.init(xy0)
+    for k in range(40):
+        a, b = fast.predict(a), ref.predict(b)
+        np.testing.assert_allclose(fast.position(a), ref.position(b), rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(fast.innovation_cov(a), ref.innovation_cov(b), rtol=1e-10)
+        np.testing.assert_allclose(fast.position_cov(a), ref.position_cov(b), rtol=1e-10)
+        z = xy0 + k * 2.0 + rng.normal(0, 2.0, xy0.shape)
+        mask = rng.random(6) > 0.3
+        z[~mask & (rng.random(6) > 0.5)] = np.nan  # some missing rows say so with NaN
+        a, b = fast.update(a, z, mask), ref.update(b, z, mask)
+        np.testing.assert_allclose(fast.position(a), ref.position(b), rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(fast.velocity(a), ref.velocity(b), rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(
+            fast.position_cov(a), ref.position_cov(b), rtol=1e-9, atol=1e-12
+        )
+
+
+def test_fast_cv_rows_without_measurement_keep_the_prediction() -> None:
+    f = FastCVPredictor(q=0.5, r=2.0)
+    s = f.predict(f.init(np.array([[0.0, 0.0], [10.0, 10.0]])))
+    z = np.array([[1.0, 1.0], [np.nan, np.nan]])
+    u = f.update(s, z, np.array([True, True]))
+    np.testing.assert_array_equal(u.x[1], s.x[1])
+    np.testing.assert_array_equal(u.P[1], s.P[1])
+    assert not np.array_equal(u.x[0], s.x[0])
+
+
+def _scene(rng, n, m, spread):
+    txy = rng.uniform(0, spread, (n, 2))
+    dxy = np.vstack([txy[: m // 2] + rng.normal(0, 3, (m // 2, 2)),
+                     rng.uniform(0, spread, (m - m // 2, 2))])
+    return txy, dxy
+
+
+@pytest.mark.parametrize("n, m, spread", [(8, 9, 80.0), (300, 280, 700.0), (2000, 1900, 1500.0)])
+@pytest.mark.parametrize("metric", ["euclidean", "mahalanobis"])
+def test_gate_pairs_equal_association_candidate_pairs(n, m, spread, metric) -> None:
+    rng = np.random.default_rng(n)
+    txy, dxy = _scene(rng, n, m, spread)
+    s = rng.uniform(2.0, 30.0, n)
+    s[:3] = 400.0  # a few wide gates (long coasting)
+    scale = s if metric == "mahalanobis" else None
+    gate = 9.21 if metric == "mahalanobis" else 100.0
+    ti, dj, cost = fa.gate_pairs(txy, dxy, scale, gate)
+    view = TrackView.from_arrays(txy, cov=None, S=s[:, None, None] * np.eye(2))
+    rt, rd, rc = candidate_pairs(view, dxy, metric, gate)
+    got = dict(zip(zip(ti.tolist(), dj.tolist(), strict=True), cost.tolist(), strict=True))
+    want = dict(zip(zip(rt.tolist(), rd.tolist(), strict=True), rc.tolist(), strict=True))
+    assert got.keys() == want.keys() and len(got) > 0
+    np.testing.assert_allclose([got[k] for k in want], list(want.values()), rtol=1e-12)
+
+
+def _brute(ti, dj, cost, n, m, half_u):
+    """Minimum of Σ cost + half_u · unmatched over every matching (tiny problems)."""
+    best, best_set = np.inf, None
+    pairs = list(range(len(ti)))
+    for r in range(min(n, m) + 1):
+        for sub in itertools.combinations(pairs, r):
+            if len({ti[p] for p in sub}) < r or len({dj[p] for p in sub}) < r:
+                continue
+            total = sum(cost[p] for p in sub) + half_u * (n + m - 2 * r)
+            if total < best - 1e-12:
+                best, best_set = total, {(ti[p], dj[p]) for p in sub}
+    return best_set
+
+
+def test_optimal_equals_brute_force_on_tiny_problems() -> None:
+    rng = np.random.default_rng(1)
+    for _ in range(60):
+        n, m = rng.integers(1, 5), rng.integers(1, 5)
+        allowed = rng.random((n, m)) < 0.6
+        ti, dj = np.nonzero(allowed)
+        cost = rng.uniform(0, 1, ti.size)
+        got = fa.optimal(ti, dj, cost, n, m, 0.5)
+        assert set(zip(got[0].tolist(), got[1].tolist(), strict=True)) == _brute(
+            ti, dj, cost, n, m, 0.5
+        )
+
+
+@pytest.mark.parametrize("n, m, spread", [(40, 45, 150.0), (800, 760, 900.0), (3000, 2900, 1200.0)])
+def test_optimal_equals_association_assign_with_the_same_penalty(n, m, spread) -> None:
+    rng = np.random.default_rng(n + 1)
+    txy, dxy = _scene(rng, n, m, spread)
+    gate = 400.0
+    ti, dj, cost = fa.gate_pairs(txy, dxy, None, gate)
+    mt, md = fa.optimal(ti, dj, cost, n, m, gate)
+    ref = assign(ti, dj, cost, n, m, "optimal", unmatched_cost=2 * gate)
+    assert set(zip(mt.tolist(), md.tolist(), strict=True)) == set(
+        zip(ref.track.tolist(), ref.det.tolist(), strict=True)
+    )
+    if n * m <= 2500:  # the single dense solve gives the same matching
+        dt, dd = fa.dense_optimal(txy, dxy, None, gate)
+        assert set(zip(dt.tolist(), dd.tolist(), strict=True)) == set(
+            zip(mt.tolist(), md.tolist(), strict=True)
+        )
+
+
+def test_optimal_is_invariant_to_permuting_detections() -> None:
+    rng = np.random.default_rng(9)
+    txy, dxy = _scene(rng, 500, 480, 600.0)
+    perm = rng.permutation(480)
+    a = fa.optimal(*fa.gate_pairs(txy, dxy, None, 225.0), 500, 480, 225.0)
+    b = fa.optimal(*fa.gate_pairs(txy, dxy[perm], None, 225.0), 500, 480, 225.0)
+    assert set(zip(a[0].tolist(), a[1].tolist(), strict=True)) == set(
+        zip(b[0].tolist(), perm[b[1]].tolist(), strict=True)
+    )
