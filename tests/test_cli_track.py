@@ -234,3 +234,14 @@ def test_preset_arguments_go_to_the_preset(tmp_path) -> None:
     assert summary["tracker"]["predictor_params"] == dict(ref.predictor_params)
     with pytest.raises(InputError, match="preset"):
         build_tracker_config(RunSettings(tracker={"preset": "paper9"}), fps=15.0)
+
+
+def test_changing_the_distance_resets_the_gate() -> None:
+    from mvtrack.association.distances import default_gate
+    from mvtrack.pipeline import build_tracker_config
+
+    cfg = build_tracker_config(RunSettings(tracker={"preset": "paper1",
+                                                    "distance": "mahalanobis"}), fps=30.0)
+    assert cfg.distance == "mahalanobis" and cfg.gate in (None, default_gate("mahalanobis"))
+    cfg = build_tracker_config(RunSettings(tracker={"distance": "coupled", "gate": 5.0}), 30.0)
+    assert cfg.gate == 5.0
