@@ -194,6 +194,15 @@ def breaks(frames: IntArray, tracks: IntArray) -> list[tuple[int, int, int]]:
     return [(int(f[i]), int(t[i - 1]), int(t[i])) for i in change]
 
 
+def default_config(scene: Scene) -> TrackerConfig:
+    """The tracker configuration ``mvtrack track`` uses by default for this scene's video
+    (the ``default`` preset with the size-dependent defaults of
+    :func:`mvtrack.pipeline.resolve_settings`)."""
+    from mvtrack.pipeline import build_tracker_config
+
+    return build_tracker_config(resolve_settings(RunSettings(), scene.size), scene.fps)
+
+
 def summarise(run: SceneRun, min_assoc: int = 5) -> dict[str, Any]:
     """Track counts of a run: tracks with ≥ ``min_assoc`` associations, tracks per object
     (by majority pairing), spurious tracks (paired with nothing most of the time), and per

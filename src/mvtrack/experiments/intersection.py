@@ -22,11 +22,17 @@ from typing import Any
 import numpy as np
 
 from mvtrack.config import RunSettings
-from mvtrack.experiments._video import SceneRun, summarise, track_scene, trajectory_plot
+from mvtrack.experiments._video import (
+    SceneRun,
+    default_config,
+    summarise,
+    track_scene,
+    trajectory_plot,
+)
 from mvtrack.experiments.report import Report
 from mvtrack.pipeline import resolve_settings
 from mvtrack.sim.scenes import x5_intersection
-from mvtrack.tracking import default, paper1
+from mvtrack.tracking import paper1
 
 CATEGORIES = ("straight", "left", "right", "waiting")
 PAPER = {
@@ -42,11 +48,12 @@ MIN_ASSOC = 5
 COVER = 0.8
 
 
-def _configs(fps: float) -> dict[str, Any]:
+def _configs(scene: Any) -> dict[str, Any]:
+    fps = scene.fps
     return {
         "kalman-ca": paper1("kalman-ca", fps=fps, gate_px=20.0),
         "rls": paper1("rls", fps=fps, gate_px=20.0),
-        "default": default(fps=fps),
+        "default": default_config(scene),
     }
 
 
@@ -132,7 +139,7 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
         from mvtrack.sim.render import render_frames
 
         frames = list(render_frames(scene, s))
-        for name, cfg in _configs(scene.fps).items():
+        for name, cfg in _configs(scene).items():
             with_t = track_scene(scene, cfg, seed=s, frames=frames, templates=True)
             without = track_scene(scene, cfg, seed=s, frames=frames, templates=False)
             spec = track_scene(scene, cfg, seed=s, frames=frames, templates=True,
@@ -224,8 +231,8 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
     notes = f"""
 Setup: {n_runs} renderings (seeds {seed}–{seed + n_runs - 1}) of the SPEC §5 X5 scene, each
 tracked by paper 1's system (20 px circular gate, non-exclusive nearest, warm-up) with the CA
-Kalman filter and with RLS, and by the modern default (CV Kalman with r = 4 px², Mahalanobis,
-optimal, 3-hit confirmation). Detection: disturbance map (T = 25, β_min = 0.02) with the
+Kalman filter and with RLS, and by the `default` preset as `mvtrack track` uses it.
+Detection: disturbance map (T = 25, β_min = 0.02) with the
 pipeline's blob stage (7×7 closing, area ≥ 40 px: `mvtrack.pipeline.resolve_settings`), and
 for comparison the SPEC §1.1 [R] blob stage (opening only, area ≥ 20 px), under which the
 two tones of a vehicle and the jitter-flickering edges of a standing vehicle become separate

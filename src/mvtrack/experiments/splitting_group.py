@@ -23,10 +23,17 @@ from typing import Any
 
 import numpy as np
 
-from mvtrack.experiments._video import SceneRun, breaks, summarise, track_scene, trajectory_plot
+from mvtrack.experiments._video import (
+    SceneRun,
+    breaks,
+    default_config,
+    summarise,
+    track_scene,
+    trajectory_plot,
+)
 from mvtrack.experiments.report import Report
 from mvtrack.sim.scenes import x8_splitting_group
-from mvtrack.tracking import default, paper2
+from mvtrack.tracking import paper2
 
 DISTANCES = ("uncoupled", "coupled", "mahalanobis")
 PAPER = {
@@ -39,9 +46,10 @@ ISOLATION_PX = 12.0
 MIN_ASSOC = 5
 
 
-def _configs(fps: float) -> dict[str, Any]:
+def _configs(scene: Any) -> dict[str, Any]:
+    fps = scene.fps
     out: dict[str, Any] = {d: paper2(d, fps=fps) for d in DISTANCES}
-    out["default"] = default(fps=fps)
+    out["default"] = default_config(scene)
     return out
 
 
@@ -113,7 +121,7 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
         scene = x8_splitting_group(s)
         frames = list(render_frames(scene, s))
         entry: dict[str, Any] = {"seed": s}
-        for name, cfg in _configs(scene.fps).items():
+        for name, cfg in _configs(scene).items():
             tr = track_scene(scene, cfg, seed=s, frames=frames)
             item = {"p1": p1_result(tr), "tracks": summarise(tr, MIN_ASSOC)["tracks"],
                     "score": _score(tr)}
