@@ -177,3 +177,83 @@ def test_bad_input_raises() -> None:
         assign([0], [0], [np.nan], 1, 1)
     with pytest.raises(ValueError, match="equal length"):
         assign([0, 0], [0], [1.0], 1, 1)
+
+
+@pytest.mark.parametrize("rounds", [1, 12])
+def test_components_match_scipy_including_long_chains(rounds: int, monkeypatch) -> None:
+    """Label propagation, and (with one round allowed) the SciPy fallback."""
+    import sys
+
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+
+    module = sys.modules["mvtrack.association.assign"]
+    monkeypatch.setattr(module, "_PROPAGATION_ROUNDS", rounds)
+    _components = module._components
+
+    rng = np.random.default_rng(14)
+    chain_t = np.repeat(np.arange(60), 2)[1:]  # a chain t0-d0-t1-d1-...
+    chain_d = np.repeat(np.arange(60), 2)[:-1]
+    cases = [(chain_t, chain_d, 60, 60)]
+    for _ in range(20):
+        n, m = rng.integers(1, 40, 2)
+        p = rng.integers(0, 2 * (n + m))
+        cases.append((rng.integers(0, n, p), rng.integers(0, m, p), n, m))
+    for ti, dj, n, m in cases:
+        lab = _components(ti, dj, n, m)
+        g = coo_array((np.ones(ti.size), (ti, n + dj)), shape=(n + m, n + m))
+        k, ref = connected_components(g, directed=False)
+        # same partition, labelled by the smallest node of each component
+        assert np.unique(lab).size == k
+        assert np.unique(np.stack([lab, ref]), axis=1).shape[1] == k
+        assert np.all(lab <= np.arange(n + m)) and np.all(lab[lab] == lab)
+
+
+def _augmented_optimum(c: np.ndarray, u: float) -> float:
+    """Reference: one dense LSA on the (N+M)² cost-of-non-assignment matrix."""
+    n, m = c.shape
+    aug = np.full((n + m, m + n), np.inf)
+    aug[:n, :m] = np.where(c < u, c, np.inf)
+    aug[np.arange(n), m + np.arange(n)] = u / 2
+    aug[n + np.arange(m), np.arange(m)] = u / 2
+    aug[n:, m:] = 0.0
+    r, k = linear_sum_assignment(aug)
+    return float(aug[r, k].sum())
+
+
+@pytest.mark.parametrize("solver", ["auto", "dense", "sparse"])
+@pytest.mark.parametrize("integer_costs", [False, True])
+@pytest.mark.parametrize("dense_frame_nodes", [0, 128])
+def test_optimal_with_leaf_peeling_equals_reference_on_geometric_scenes(
+    solver: str, integer_costs: bool, dense_frame_nodes: int, monkeypatch
+) -> None:
+    """Frames above the dense-frame size: peeling + clusters + solver, ties included.
+
+    ``DENSE_FRAME_NODES = 0`` forces the per-cluster paths after the peeling.
+    """
+    import sys
+
+    monkeypatch.setattr(
+        sys.modules["mvtrack.association.assign"], "DENSE_FRAME_NODES", dense_frame_nodes
+    )
+    rng = np.random.default_rng(15)
+    for _ in range(6):
+        n = int(rng.integers(80, 160))
+        m = int(rng.integers(80, 160))
+        pos_t = rng.uniform(0, 300, (n, 2))
+        pos_d = np.vstack(
+            [
+                pos_t[: min(n, m)] + rng.normal(0, 4, (min(n, m), 2)),
+                rng.uniform(0, 300, (m - min(n, m), 2)),
+            ]
+        )
+        d2 = ((pos_t[:, None] - pos_d[None]) ** 2).sum(-1)
+        if integer_costs:
+            d2 = np.round(d2 / 20.0)
+        c = np.where(d2 <= (15.0 if integer_costs else 300.0), d2, np.inf)
+        for u in (None, float(np.nanmax(np.where(np.isfinite(c), c, np.nan))) * 0.7):
+            a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u, solver=solver)
+            uu = 2 * np.abs(c[np.isfinite(c)]).max() * (1 + 1e-9) + 1e-12 if u is None else u
+            got = a.cost.sum() + uu * (n + m - 2 * len(a)) / 2
+            assert got == pytest.approx(_augmented_optimum(c, uu), rel=1e-9, abs=1e-9)
+            assert len(set(a.det.tolist())) == len(a) == len(set(a.track.tolist()))

@@ -42,10 +42,17 @@ FloatArray = NDArray[np.float64]
 ASSIGN_RULES = ("nearest", "greedy", "optimal")
 
 #: with solver="auto", more conflicting clusters than this are solved in one sparse problem
-SPARSE_CLUSTERS = 4
-#: with solver="auto", clusters (or whole frames) of at most this many tracks + detections are
-#: solved with a dense ``linear_sum_assignment``; larger ones with the sparse solver
+SPARSE_CLUSTERS = 8
+#: with solver="auto", clusters of at most this many tracks + detections are solved with a
+#: dense ``linear_sum_assignment``; larger ones with the sparse solver
 SMALL_NODES = 64
+#: with solver="auto", a frame with at most this many gated tracks + detections is solved as
+#: one dense problem without looking for clusters
+DENSE_FRAME_NODES = 128
+#: rounds of label propagation before falling back to SciPy's connected_components
+_PROPAGATION_ROUNDS = 12
+#: rounds of exact leaf peeling before the remaining clusters go to the solvers
+_PEEL_ROUNDS = 8
 
 
 @dataclass(frozen=True)
@@ -104,9 +111,27 @@ def _first_per_group(group: IntArray) -> NDArray[np.bool_]:
     return first
 
 
-def _nearest(ti: IntArray, dj: IntArray, cost: FloatArray) -> tuple[IntArray, ...]:
-    order = np.lexsort((dj, cost, ti))  # by track, then cost, then detection row
-    keep = order[_first_per_group(ti[order])]
+def _rank(ti: IntArray, dj: IntArray, cost: FloatArray) -> IntArray:
+    """Position of every pair in the total order (cost, track row, detection row)."""
+    order = np.argsort(cost, kind="stable")
+    sc = cost[order]
+    if sc.size > 1 and np.any(sc[1:] == sc[:-1]):  # ties: break them by (track, detection)
+        order = np.lexsort((dj, ti, cost))
+    rank = np.empty(cost.shape[0], dtype=np.intp)
+    rank[order] = np.arange(cost.shape[0])
+    return rank
+
+
+def _best_of(group: IntArray, rank: IntArray, size: int) -> IntArray:
+    """(size,) smallest rank of each group (the largest intp where a group has no pair)."""
+    best = np.full(size, np.iinfo(np.intp).max, dtype=np.intp)
+    np.minimum.at(best, group, rank)
+    return best
+
+
+def _nearest(ti: IntArray, dj: IntArray, cost: FloatArray, n_tracks: int) -> tuple[IntArray, ...]:
+    rank = _rank(ti, dj, cost)
+    keep = rank == _best_of(ti, rank, n_tracks)[ti]  # each track's first pair in the order
     return ti[keep], dj[keep], cost[keep]
 
 
@@ -119,26 +144,56 @@ def _greedy(
     detection is accepted by the sequential greedy too (every earlier pair touches neither
     node), and removing accepted nodes leaves the greedy order of the rest unchanged.
     """
-    order = np.lexsort((dj, ti, cost))
-    t, d = ti[order], dj[order]
-    rank = np.arange(t.shape[0])
-    big = t.shape[0]
+    rank = _rank(ti, dj, cost)
+    alive = np.arange(ti.shape[0])
     acc: list[IntArray] = []
-    while rank.size:
-        best_t = np.full(n_tracks, big)
-        best_d = np.full(n_dets, big)
-        np.minimum.at(best_t, t, rank)
-        np.minimum.at(best_d, d, rank)
-        mutual = (best_t[t] == rank) & (best_d[d] == rank)
-        acc.append(rank[mutual])
+    while alive.size:
+        t, d, r = ti[alive], dj[alive], rank[alive]
+        mutual = (_best_of(t, r, n_tracks)[t] == r) & (_best_of(d, r, n_dets)[d] == r)
+        acc.append(alive[mutual])
         used_t = np.zeros(n_tracks, dtype=bool)
         used_t[t[mutual]] = True
         used_d = np.zeros(n_dets, dtype=bool)
         used_d[d[mutual]] = True
-        alive = ~(used_t[t] | used_d[d])
-        t, d, rank = t[alive], d[alive], rank[alive]
-    sel = order[np.concatenate(acc)] if acc else np.zeros(0, dtype=np.intp)
+        alive = alive[~(used_t[t] | used_d[d])]
+    sel = np.concatenate(acc) if acc else np.zeros(0, dtype=np.intp)
     return ti[sel], dj[sel], cost[sel]
+
+
+def _peel_leaves(
+    ti: IntArray, dj: IntArray, cost: FloatArray, n_tracks: int, n_dets: int
+) -> tuple[NDArray[np.bool_], IntArray]:
+    """Exact reduction of the optimal problem: match leaves that cannot do better.
+
+    If a detection's only gated track is ``t`` and it is ``t``'s cheapest detection, some
+    optimal matching contains that pair (swap ``t``'s partner in any optimum for it: the cost
+    does not rise, and an unmatched ``t`` only gains since every pair costs less than ``u``);
+    likewise with tracks and detections exchanged. Accepted pairs never share a node, so a
+    whole round is accepted at once; removing their nodes leaves a smaller problem whose
+    optimum completes an optimum of the original. Returns the chosen mask and the rows of the
+    pairs still alive after at most :data:`_PEEL_ROUNDS` rounds.
+    """
+    rank = _rank(ti, dj, cost)
+    chosen = np.zeros(ti.shape[0], dtype=bool)
+    alive = np.arange(ti.shape[0])
+    for _ in range(_PEEL_ROUNDS):
+        t, d, r = ti[alive], dj[alive], rank[alive]
+        deg_t = np.bincount(t, minlength=n_tracks)
+        deg_d = np.bincount(d, minlength=n_dets)
+        acc = ((deg_d[d] == 1) & (_best_of(t, r, n_tracks)[t] == r)) | (
+            (deg_t[t] == 1) & (_best_of(d, r, n_dets)[d] == r)
+        )
+        if not acc.any():
+            break
+        chosen[alive[acc]] = True
+        used_t = np.zeros(n_tracks, dtype=bool)
+        used_t[t[acc]] = True
+        used_d = np.zeros(n_dets, dtype=bool)
+        used_d[d[acc]] = True
+        alive = alive[~(used_t[t] | used_d[d])]
+        if alive.size == 0:
+            break
+    return chosen, alive
 
 
 def _solve_dense(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDArray[np.bool_]:
@@ -196,6 +251,33 @@ def _solve_sparse(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDA
     return chosen
 
 
+def _components(ti: IntArray, dj: IntArray, n_tracks: int, n_dets: int) -> IntArray:
+    """Connected-component label of every node (tracks, then detections) of the gate graph.
+
+    Each label is the smallest node index in the component. Minimum-label propagation along
+    the pairs with pointer jumping converges in a few rounds for the small clusters of
+    typical frames; if it has not after :data:`_PROPAGATION_ROUNDS`, SciPy's
+    ``connected_components`` finishes the job (large, long clusters).
+    """
+    nodes = n_tracks + n_dets
+    a, b = ti, n_tracks + dj
+    lab = np.arange(nodes)
+    for _ in range(_PROPAGATION_ROUNDS):
+        low = np.minimum(lab[a], lab[b])
+        new = lab.copy()
+        np.minimum.at(new, a, low)
+        np.minimum.at(new, b, low)
+        new = new[new[new]]  # pointer jumping
+        if np.array_equal(new, lab):
+            return lab
+        lab = new
+    graph = coo_array((np.ones(a.shape[0]), (a, b)), shape=(nodes, nodes))
+    _, comp = connected_components(graph, directed=False)
+    first = np.full(int(comp.max()) + 1, nodes)
+    np.minimum.at(first, comp, np.arange(nodes))
+    return first[comp]
+
+
 def _optimal(
     ti: IntArray,
     dj: IntArray,
@@ -205,52 +287,67 @@ def _optimal(
     unmatched_cost: float | None,
     solver: str,
 ) -> tuple[IntArray, ...]:
-    p = ti.shape[0]
     if unmatched_cost is None:  # every pair worth matching alone; see the module docstring
         u = 2.0 * float(np.abs(cost).max()) * (1.0 + 1e-9) + 1e-12
     else:
         u = float(unmatched_cost)
+    useful = cost < u  # a pair costing u or more never improves a matching
+    if not useful.all():
+        ti, dj, cost = ti[useful], dj[useful], cost[useful]
+    if ti.size == 0:
+        return ti, dj, cost
     deg_t = np.bincount(ti, minlength=n_tracks)
     deg_d = np.bincount(dj, minlength=n_dets)
     if deg_t.max() <= 1 and deg_d.max() <= 1:  # no conflicts at all: every pair stands alone
-        keep = cost < u
-        return ti[keep], dj[keep], cost[keep]
-    if solver != "sparse" and np.count_nonzero(deg_t) + np.count_nonzero(deg_d) <= SMALL_NODES:
+        return ti, dj, cost
+    if (
+        solver != "sparse"
+        and np.count_nonzero(deg_t) + np.count_nonzero(deg_d) <= DENSE_FRAME_NODES
+    ):
         chosen = _solve_dense(ti, dj, cost, u / 2)  # small frame: one dense solve, no clusters
         return ti[chosen], dj[chosen], cost[chosen]
-    graph = coo_array(
-        (np.ones(p), (ti, n_tracks + dj)), shape=(n_tracks + n_dets, n_tracks + n_dets)
-    )
-    ncomp, labels = connected_components(graph, directed=False)
-    lab = labels[ti]
-    nt = np.bincount(labels[:n_tracks][deg_t > 0], minlength=ncomp)
-    nd = np.bincount(labels[n_tracks:][deg_d > 0], minlength=ncomp)
-    trivial = (nt <= 1) | (nd <= 1)  # a star: every matching has at most one pair
-
-    chosen = np.zeros(p, dtype=bool)
-    # trivial clusters, all at once: the cheapest pair, if it beats leaving both unmatched
-    tri = np.flatnonzero(trivial[lab])
-    if tri.size:
-        order = tri[np.lexsort((dj[tri], ti[tri], cost[tri], lab[tri]))]
-        best = order[_first_per_group(lab[order])]
-        chosen[best[cost[best] < u]] = True
-    # conflicting clusters (at least two tracks and two detections)
-    hard = np.flatnonzero(~trivial[lab])
-    if hard.size:
-        hard_c = ~trivial & (nt > 0)
-        n_hard = int(np.count_nonzero(hard_c))
-        largest = int((nt + nd)[hard_c].max())
-        use_sparse = solver == "sparse" or (
-            solver == "auto" and (n_hard > SPARSE_CLUSTERS or largest > SMALL_NODES)
-        )
-        if use_sparse:
-            chosen[hard[_solve_sparse(ti[hard], dj[hard], cost[hard], u / 2)]] = True
-        else:
-            order = hard[np.argsort(lab[hard], kind="stable")]
-            bounds = np.flatnonzero(_first_per_group(lab[order]))
-            for s, e in zip(bounds, [*bounds[1:], order.size], strict=True):
-                idx = order[s:e]
-                chosen[idx[_solve_dense(ti[idx], dj[idx], cost[idx], u / 2)]] = True
+    chosen, rest = _peel_leaves(ti, dj, cost, n_tracks, n_dets)
+    if rest.size and solver != "sparse":
+        t, d = ti[rest], dj[rest]
+        if np.unique(t).size + np.unique(d).size <= DENSE_FRAME_NODES:
+            # few pairs left: one dense solve of their union (clusters are independent)
+            chosen[rest[_solve_dense(t, d, cost[rest], u / 2)]] = True
+            return ti[chosen], dj[chosen], cost[chosen]
+    if rest.size:
+        t, d, c = ti[rest], dj[rest], cost[rest]
+        labels = _components(t, d, n_tracks, n_dets)
+        lab = labels[t]
+        has_t = np.zeros(n_tracks, dtype=bool)
+        has_t[t] = True
+        has_d = np.zeros(n_dets, dtype=bool)
+        has_d[d] = True
+        ncomp = n_tracks + n_dets  # labels are node indices (not compact)
+        nt = np.bincount(labels[:n_tracks][has_t], minlength=ncomp)
+        nd = np.bincount(labels[n_tracks:][has_d], minlength=ncomp)
+        trivial = (nt <= 1) | (nd <= 1)  # a star: every matching has at most one pair
+        # stars left by the peeling (ties), all at once: the cheapest pair
+        tri = np.flatnonzero(trivial[lab])
+        if tri.size:
+            order = tri[np.lexsort((d[tri], t[tri], c[tri], lab[tri]))]
+            chosen[rest[order[_first_per_group(lab[order])]]] = True
+        # conflicting clusters (at least two tracks and two detections)
+        hard = np.flatnonzero(~trivial[lab])
+        if hard.size:
+            hard_c = ~trivial & (nt > 0)
+            n_hard = int(np.count_nonzero(hard_c))
+            largest = int((nt + nd)[hard_c].max())
+            use_sparse = solver == "sparse" or (
+                solver == "auto" and (n_hard > SPARSE_CLUSTERS or largest > SMALL_NODES)
+            )
+            if use_sparse:
+                sel = _solve_sparse(t[hard], d[hard], c[hard], u / 2)
+                chosen[rest[hard[sel]]] = True
+            else:
+                order = hard[np.argsort(lab[hard], kind="stable")]
+                bounds = np.flatnonzero(_first_per_group(lab[order]))
+                for s, e in zip(bounds, [*bounds[1:], order.size], strict=True):
+                    idx = order[s:e]
+                    chosen[rest[idx[_solve_dense(t[idx], d[idx], c[idx], u / 2)]]] = True
     return ti[chosen], dj[chosen], cost[chosen]
 
 
@@ -283,7 +380,7 @@ def assign(
     solver : {"auto", "dense", "sparse"}
         ``optimal`` only: one ``linear_sum_assignment`` per conflicting cluster (``dense``),
         one sparse LAPJVsp problem for all of them (``sparse``), or ``auto``: a frame with at
-        most :data:`SMALL_NODES` gated tracks + detections is one dense problem; otherwise
+        most :data:`DENSE_FRAME_NODES` gated tracks + detections is one dense problem; otherwise
         dense per cluster when there are at most :data:`SPARSE_CLUSTERS` conflicting clusters
         of at most :data:`SMALL_NODES` nodes, else sparse.
 
@@ -314,7 +411,7 @@ def assign(
         e = np.zeros(0, dtype=np.intp)
         return _finish(e, e.copy(), np.zeros(0), n_tracks, n_dets)
     if rule == "nearest":
-        t, d, c = _nearest(ti, dj, cost)
+        t, d, c = _nearest(ti, dj, cost, n_tracks)
     elif rule == "greedy":
         t, d, c = _greedy(ti, dj, cost, n_tracks, n_dets)
     else:
