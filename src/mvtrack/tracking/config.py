@@ -7,6 +7,7 @@ therefore behaves the same at 10 and at 30 fps (up to rounding to whole frames).
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -297,8 +298,9 @@ PRESETS = {"paper1": paper1, "paper2": paper2, "default": default}
 def preset(name: str, **overrides: Any) -> TrackerConfig:
     """The preset ``name`` (``default``, ``paper1``, ``paper2``) with fields overridden.
 
-    ``fps`` is passed to the preset (its frame-based paper values depend on it); the other
-    overrides replace fields of the result.
+    Overrides the preset function takes (``fps``, on which its frame-based paper values
+    depend, and ``predictor`` for ``paper1``) are passed to it; the others replace fields of
+    its result. Changing ``distance`` without a ``gate`` uses the new distance's default.
     """
     try:
         build = PRESETS[name]
@@ -306,8 +308,11 @@ def preset(name: str, **overrides: Any) -> TrackerConfig:
         raise ValueError(
             f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}"
         ) from None
-    fps = overrides.pop("fps", None)
     if "distance" in overrides and "gate" not in overrides:
         overrides["gate"] = None  # the new distance's own default gate
-    config = build() if fps is None else build(fps=fps)
+    # arguments the preset itself takes (fps, paper 1's predictor) go to it, the rest replace
+    # fields of its result
+    takes = inspect.signature(build).parameters
+    own = {k: overrides.pop(k) for k in list(overrides) if k in takes}
+    config = build(**own)
     return config.replace(**overrides) if overrides else config

@@ -1,0 +1,85 @@
+"""``mvtrack track-detections``: a det file in, MOTChallenge results out, one-line errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mvtrack.cli import main
+from mvtrack.cli.track_detections import results_name
+from mvtrack.io.mot import read_tracks, write_detections
+from mvtrack.types import Detections
+
+
+def _det_file(path, n_frames=30):
+    a = np.array([100.0, 100.0]) + np.arange(n_frames)[:, None] * [3.0, 1.0]
+    b = np.array([400.0, 300.0]) + np.arange(n_frames)[:, None] * [-2.0, 2.0]
+    frames = [
+        Detections(k, np.vstack([a[k], b[k]]), np.array([[40.0, 30.0], [30.0, 60.0]]))
+        for k in range(n_frames)
+    ]
+    frames[10] = frames[10].take(np.array([1]))  # target a missed once
+    write_detections(path, frames)
+    return a, b
+
+
+def test_track_detections_writes_results_and_prints_a_summary(tmp_path, capsys) -> None:
+    det = tmp_path / "seq" / "det" / "det.txt"
+    det.parent.mkdir(parents=True)
+    a, _ = _det_file(det)
+    out = tmp_path / "res"
+    assert main(["track-detections", str(det), "--out", str(out)]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.count("\n") == 0 and "30 frames, 59 detections -> 2 tracks" in line
+    table = read_tracks(out / "seq.txt")
+    assert sorted(set(table.id.tolist())) == [1, 2]
+    # confirmed on the 2nd frame; the missed frame is bridged by a coasting row
+    assert table.frame.min() == 1 and len(table) == 2 * 29
+    id_a = table.id[(table.frame == 5) & (np.abs(table.tlwh[:, 2] - 40.0) < 5)]
+    rows_a = table.take(np.flatnonzero(table.id == id_a[0]))
+    centre = rows_a.tlwh[:, :2] + rows_a.tlwh[:, 2:] / 2
+    np.testing.assert_allclose(centre, a[rows_a.frame], atol=1.5)
+    assert main(["track-detections", str(det), "--out", str(out), "--no-coasting"]) == 0
+    assert len(read_tracks(out / "seq.txt")) == 2 * 29 - 1
+
+
+@pytest.mark.parametrize(
+    "option, value",
+    [("--predictor", "kalman-xyz"), ("--distance", "manhattan"), ("--assign", "hungarian")],
+)
+def test_unknown_names_are_one_line_errors(tmp_path, capsys, option, value) -> None:
+    det = tmp_path / "d.txt"
+    _det_file(det)
+    assert main(["track-detections", str(det), "--out", str(tmp_path / "o"), option, value]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error:") and value in err and "\n" not in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_options_reach_the_tracker(tmp_path, capsys) -> None:
+    det = tmp_path / "d.txt"
+    _det_file(det)
+    args = ["track-detections", str(det), "--out", str(tmp_path / "o"), "--preset", "paper1",
+            "--predictor", "rls", "--fps", "15"]
+    assert main(args) == 0
+    assert "(rls, euclidean, nearest;" in capsys.readouterr().out
+    assert main([*args[:-4], "--distance", "mahalanobis", "--gate", "20"]) == 0
+    assert "(kalman-ca, mahalanobis, nearest;" in capsys.readouterr().out
+
+
+def test_bad_file_and_bad_values_are_one_line_errors(tmp_path, capsys) -> None:
+    bad = tmp_path / "bad.txt"
+    bad.write_text("1,-1,10,10,5\n")
+    assert main(["track-detections", str(bad), "--out", str(tmp_path / "o")]) == 2
+    assert "bad.txt:1" in capsys.readouterr().err
+    det = tmp_path / "d.txt"
+    _det_file(det)
+    assert main(["track-detections", str(det), "--out", str(tmp_path / "o"), "--fps", "0"]) == 2
+    assert "fps" in capsys.readouterr().err
+
+
+def test_results_name() -> None:
+    from pathlib import Path
+
+    assert results_name(Path("MOT17-02/det/det.txt")) == "MOT17-02.txt"
+    assert results_name(Path("x/cam1.txt")) == "cam1.txt"
