@@ -35,7 +35,7 @@ def _centre(tl: tuple[int, int]) -> np.ndarray:
 
 def _bank() -> TemplateBank:
     """A bank without the travel guard, for tests of the search itself."""
-    return TemplateBank(min_travel=0, min_travel_px=0, min_hits=0)
+    return TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, max_drift=None)
 
 
 def _bank_with_vehicle(tl=(50, 40), uid: int = 7) -> TemplateBank:
@@ -166,6 +166,17 @@ def test_only_tracks_that_travelled_and_were_seen_often_are_searched() -> None:
     assert bank.eligible.tolist() == [False]
 
 
+def test_only_tracks_predicted_where_they_were_last_seen_are_searched() -> None:
+    tl = (50, 40)
+    bank = TemplateBank(min_travel=0, min_travel_px=0, min_hits=0)  # max_drift = 5 px
+    bank.observe(_frame(tl, seed=1), [7], [_centre(tl)], [[VW, VH]])
+    frame = _frame(tl, seed=2)
+    assert bank.rescue(frame, [7], [_centre(tl) + np.array([3.0, -3.0])])[0][0]  # 4.2 px
+    # predicted 8 px on: a moving object that was missed, left to the tracker to coast
+    found, _, score = bank.rescue(frame, [7], [_centre(tl) + np.array([8.0, 0.0])])
+    assert not found[0] and np.isnan(score[0])
+
+
 def test_a_shrinking_detection_keeps_the_last_full_appearance() -> None:
     tl = (50, 40)
     bank = _bank()
@@ -178,7 +189,7 @@ def test_a_shrinking_detection_keeps_the_last_full_appearance() -> None:
     assert found[0]
     np.testing.assert_allclose(xy[0], _centre(tl), atol=0.01)
     # with min_fill = 0 every detection refreshes it
-    bank = TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, min_fill=0)
+    bank = TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, max_drift=None, min_fill=0)
     bank.observe(_frame(tl, seed=1), [7], [_centre(tl)], [[VW, VH]])
     bank.observe(_frame(tl, seed=2), [7], [_centre(tl)], [[VW / 2, VH / 2]])
     assert bank.template(7).shape == (VH // 2, VW // 2)
@@ -218,6 +229,8 @@ def test_bad_parameters_are_value_errors() -> None:
         TemplateBank(gate_radius=-1)
     with pytest.raises(ValueError, match="min_travel"):
         TemplateBank(min_travel=-1)
+    with pytest.raises(ValueError, match="max_drift"):
+        TemplateBank(max_drift=-1)
     with pytest.raises(ValueError, match="min_fill"):
         TemplateBank(min_fill=2)
     with pytest.raises(ValueError, match="one row per track"):

@@ -146,6 +146,12 @@ class TemplateBank:
         fading into the background, whose blob shrinks over tens of frames, or a person
         reduced to a fragment, keeps the template of its last full appearance. 0 refreshes
         on every detection.
+    max_drift : float or None, default 5.0
+        Search only tracks whose prediction lies within ``max_drift`` px of their last
+        detection or template match. A stopped vehicle's filter has come to rest where it was
+        last seen (its blob takes tens of frames to fade), while an object that was merely
+        missed (occluded, merged with another blob, leaving) is predicted to have moved on:
+        the tracker coasts it, and the bank spends no search on it. ``None`` disables the check.
 
     Attributes
     ----------
@@ -164,6 +170,7 @@ class TemplateBank:
         min_travel_px: float = 10.0,
         min_hits: int = 5,
         min_fill: float = 0.5,
+        max_drift: float | None = 5.0,
     ) -> None:
         if not (-1.0 <= min_score <= 1.0):
             raise ValueError(f"min_score must be an NCC in [-1, 1], got {min_score}")
@@ -181,6 +188,8 @@ class TemplateBank:
             raise ValueError(f"min_hits must be ≥ 0, got {min_hits}")
         if not (0.0 <= min_fill <= 1.0):
             raise ValueError(f"min_fill must be in [0, 1], got {min_fill}")
+        if max_drift is not None and not max_drift >= 0:
+            raise ValueError(f"max_drift must be ≥ 0 px or None, got {max_drift}")
         self.min_score = float(min_score)
         self.gate_radius = float(gate_radius)
         self.min_size = int(min_size)
@@ -190,6 +199,7 @@ class TemplateBank:
         self.min_travel_px = float(min_travel_px)
         self.min_hits = int(min_hits)
         self.min_fill = float(min_fill)
+        self.max_drift = None if max_drift is None else float(max_drift)
         self.clear()
 
     # ------------------------------------------------------------------ bookkeeping (arrays)
@@ -200,6 +210,7 @@ class TemplateBank:
         self._det_tick = np.zeros(0, np.int64)  # its tick
         self._area = np.zeros(0)  # reference box area: running maximum, decaying 1 %/detection
         self._origin = np.zeros((0, 2))  # first observed centre
+        self._last = np.zeros((0, 2))  # last observed centre (any detection)
         self._travel = np.zeros(0)  # distance of the last detection from the first
         self._hits = np.zeros(0, np.int64)  # detections observed
         self._templates: dict[int, _Template] = {}
@@ -281,6 +292,7 @@ class TemplateBank:
         self._det_tick[g] = self._tick
         self._area[pk] = np.maximum(area[known], 0.99 * self._area[pk])
         self._travel[pk] = np.hypot(*(xy[known] - self._origin[pk]).T)
+        self._last[pk] = xy[known]
         self._hits[pk] += 1
         new = ~known
         if new.any():
@@ -292,6 +304,7 @@ class TemplateBank:
             tick = np.full(nn, self._tick, np.int64)
             self._det_tick = np.concatenate([self._det_tick, tick])[order]
             self._origin = np.vstack([self._origin, xy[new]])[order]
+            self._last = np.vstack([self._last, xy[new]])[order]
             self._travel = np.concatenate([self._travel, np.zeros(nn)])[order]
             self._hits = np.concatenate([self._hits, np.ones(nn, np.int64)])[order]
             self._area = np.concatenate([self._area, area[new]])[order]
@@ -322,6 +335,7 @@ class TemplateBank:
         self._box = self._box[keep]
         self._det_tick = self._det_tick[keep]
         self._origin = self._origin[keep]
+        self._last = self._last[keep]
         self._travel = self._travel[keep]
         self._hits = self._hits[keep]
         self._area = self._area[keep]
@@ -420,7 +434,8 @@ class TemplateBank:
         -------
         found : (K,) bool
             NCC ≥ ``min_score`` inside the gate (always False for tracks without a template
-            or that are not :attr:`eligible`).
+            or that are not :attr:`eligible`, or predicted more than ``max_drift`` px from
+            their last detection).
         xy : (K, 2) float64
             Centre of the best match (NaN where not found).
         score : (K,) float64
@@ -442,6 +457,9 @@ class TemplateBank:
         has[has] = self.uids[pos[has]] == uids[has]
         has &= np.isfinite(pxy).all(axis=1)
         has[has] = self.eligible[pos[has]]  # tracks that have driven somewhere
+        if self.max_drift is not None:  # ... and have come to rest where last seen
+            drift = np.hypot(*(pxy[has] - self._last[pos[has]]).T)
+            has[has] = drift <= self.max_drift
         height, width = frame.shape[:2]
         ri = math.floor(r)
         for j in np.flatnonzero(has).tolist():  # the missed tracks only
@@ -474,6 +492,8 @@ class TemplateBank:
             score[j] = best
             out[j] = (x0 + c + ox, y0 + i + oy)
             found[j] = best >= self.min_score
+            if found[j]:
+                self._last[pos[j]] = out[j]  # held: the match is its last known place
         out[~found] = np.nan
         return found, out, score
 
