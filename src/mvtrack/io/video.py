@@ -292,7 +292,7 @@ def open_source(src: str | Path | int, *, fps: float | None = None) -> FrameSour
             cap.release()
             raise InputError(f"cannot open stream {src} (unreachable or unsupported)")
         return CaptureSource(cap, src, "stream", fps)
-    path = Path(src)
+    path = Path(src).expanduser()
     if not path.exists():
         raise InputError(f"video source {path} does not exist")
     if path.is_dir():
