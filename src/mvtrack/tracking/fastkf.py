@@ -91,15 +91,15 @@ class FastCVPredictor:
     def update(self, state: CVState, z: FloatArray, mask: BoolArray) -> CVState:
         """Measurement update, eqs. (3)–(5); rows with ``mask`` False or NaN keep the prediction."""
         x, P = state.x, state.P
-        a, b = P[:, 0], P[:, 1]
         nu = z - x[:, :2]  # innovation per axis (NaN where missing)
-        ok = mask & (nu == nu).all(axis=1)
-        w = ok / (a + self.r)  # 1/S, eq. (3); 0 where there is no measurement
-        nu = np.where(ok[:, None], nu, 0.0)
-        gain = np.stack([a * w, b * w], axis=1)  # K = [a, b]ᵀ / S, eq. (3)
+        ok = mask & ~np.isnan(nu[:, 0])
+        w = ok / (P[:, 0] + self.r)  # 1/S, eq. (3); 0 where there is no measurement
+        gain = P[:, :2] * w[:, None]  # K = [a, b]ᵀ / S, eq. (3)
+        nu[~ok] = 0.0
         xn = (x.reshape(-1, 2, 2) + gain[:, :, None] * nu[:, None, :]).reshape(-1, 4)  # (4)
-        f = 1.0 - a * w  # (1 − K₁), eq. (5): a r/S, b r/S, c − b²/S
-        Pn = np.stack([a * f, b * f, P[:, 2] - b * b * w], axis=1)
+        Pn = np.empty_like(P)  # eq. (5): a r/S, b r/S, c − b²/S
+        Pn[:, :2] = P[:, :2] * (1.0 - gain[:, 0])[:, None]
+        Pn[:, 2] = P[:, 2] - P[:, 1] * gain[:, 1]
         return CVState(xn, Pn)
 
     def position(self, state: CVState) -> FloatArray:

@@ -242,6 +242,8 @@ class Tracker:
             ):
                 self._fast_gate = "mahalanobis"
         self._assign_params = dict(self.config.assign_params)
+        sg = self.config.second_gate
+        self._gate2 = None if sg is None else float(sg) ** 2
         self._gate = self._distance.gate if self.config.gate is None else float(self.config.gate)
         self.reset()
 
@@ -298,15 +300,16 @@ class Tracker:
             gxy = pred.position(ps)
             if fp.warmup_hits:
                 gxy = self._warmup_centre(tab, gxy, k)
+            staged = False
             if m == 0:
                 mt = md = ud = _EMPTY
             elif self._fast_gate is not None:
-                mt, md, ud = self._associate_fast(ps, gxy, dets)
+                mt, md, ud, staged = self._associate_fast(ps, gxy, dets)
             else:
                 mt, md, ud = self._associate(ps, gxy, tab, dets)
             det_index = np.full(n, -1, dtype=np.int64)
             det_index[mt] = md
-            if self.config.second_gate is not None and ud.size and mt.size < n:
+            if self._gate2 is not None and not staged and ud.size and mt.size < n:
                 mt2, md2 = self._second_stage(gxy, det_index, dets, ud)
                 if mt2.size:
                     det_index[mt2] = md2
@@ -315,7 +318,7 @@ class Tracker:
                     used[md2] = True
                     ud = ud[~used[ud]]
             recovered = None
-            if self._fp.recover_speed is not None and ud.size:
+            if self._fp.recover_speed is not None and ud.size and mt.size < n:
                 mt2, md2 = self._recover(tab, det_index, dets, ud, k)
                 if mt2.size:
                     det_index[mt2] = md2
@@ -399,15 +402,23 @@ class Tracker:
 
     def _associate_fast(
         self, ps: Any, gxy: FloatArray, dets: Detections
-    ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
-        """Gate and assign through :mod:`mvtrack.tracking.associate` (disc-shaped gates)."""
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], bool]:
+        """Gate and assign through :mod:`mvtrack.tracking.associate` (disc-shaped gates);
+        the flag says whether the second stage was done too."""
         n, m = gxy.shape[0], len(dets)
         scale = None
         if self._fast_gate == "mahalanobis":
             scale = self.predictor.position_var(ps) + self.predictor.r  # S = (P̄ + r) I
         rule = self.config.assign
+        staged = False
         if rule == "optimal" and not self._assign_params and n * m <= fast_assoc.DENSE_LSA:
-            mt, md = fast_assoc.dense_optimal(gxy, dets.xy, scale, self._gate)
+            if self._gate2 is not None:  # both stages from one distance matrix
+                mt, md = fast_assoc.dense_two_stage(
+                    gxy, dets.xy, scale, self._gate, self._gate2
+                )
+                staged = True
+            else:
+                mt, md = fast_assoc.dense_optimal(gxy, dets.xy, scale, self._gate)
         elif rule == "optimal" and not self._assign_params:
             ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate)
             mt, md = fast_assoc.optimal(ti, dj, cost, n, m, self._gate)
@@ -417,7 +428,7 @@ class Tracker:
             mt, md = a.track, a.det
         used = np.zeros(m, dtype=bool)
         used[md] = True
-        return mt, md, np.flatnonzero(~used)
+        return mt, md, np.flatnonzero(~used), staged
 
     def _second_stage(
         self, gxy: FloatArray, det_index: IntArray, dets: Detections, ud: NDArray[np.intp]
@@ -426,7 +437,7 @@ class Tracker:
         detections left unassigned, with the wider Euclidean gate ``second_gate`` (px) around
         the prediction (gated global nearest neighbour on the squared distance)."""
         cand = np.flatnonzero(det_index < 0)
-        g = float(self.config.second_gate) ** 2
+        g = self._gate2
         ti, dj, cost = fast_assoc.gate_pairs(gxy[cand], dets.xy[ud], None, g)
         if ti.size == 0:
             return _EMPTY, _EMPTY
@@ -446,19 +457,21 @@ class Tracker:
         global nearest neighbour on ``|z − y_last|² / r²``. Returns the recovered track rows
         and their detections.
         """
+        ints = tab.ints
         cand = np.flatnonzero(
             (det_index < 0)
-            & (tab.state != TENTATIVE)
-            & (tab.hits >= self.config.recover_min_hits)
-            & (tab.last_k >= k - self._fp.recover_window)
+            # established: tentative tracks always have fewer than confirm_hits hits
+            & (ints[:, HITS] >= max(self.config.recover_min_hits, self._fp.confirm_hits))
+            & (ints[:, LAST_K] >= k - self._fp.recover_window)
         )
         if cand.size == 0:
             return _EMPTY, _EMPTY
         radius = self._fp.recover_speed * (k - tab.last_k[cand]) + self.config.recover_margin
-        ti, dj, cost = fast_assoc.gate_pairs(tab.last_xy[cand], dets.xy[ud], radius**2, 1.0)
-        if ti.size == 0:
-            return _EMPTY, _EMPTY
-        mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
+        if cand.size * ud.size <= fast_assoc.DENSE_LSA:
+            mt, md = fast_assoc.dense_optimal(tab.last_xy[cand], dets.xy[ud], radius**2, 1.0)
+        else:
+            ti, dj, cost = fast_assoc.gate_pairs(tab.last_xy[cand], dets.xy[ud], radius**2, 1.0)
+            mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
         return cand[mt], ud[md]
 
     def _warmup_centre(self, tab: TrackTable, pxy: FloatArray, k: int) -> FloatArray:
@@ -508,10 +521,10 @@ class Tracker:
         self, tab: TrackTable, ps: Any, dets: Detections, ud: NDArray[np.intp], k: int
     ) -> tuple[TrackTable, Any, tuple | None, IntArray]:
         """New tentative tracks from the unassigned detections ``ud`` (SPEC §2.1 step 4)."""
-        xy = dets.xy[ud]
-        order = birth_order(xy)
-        ud, xy = ud[order], xy[order]
         b = ud.size
+        if b > 1:
+            ud = ud[birth_order(dets.xy[ud])]
+        xy = dets.xy[ud]
         new_ps = self.predictor.init(xy)
         wh = dets.wh[ud]
         ints = np.empty((b, N_INT), dtype=np.int64)
