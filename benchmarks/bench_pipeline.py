@@ -9,15 +9,18 @@ Sequences:
   too. If the renderer is unavailable, a simple scene of textured rectangles on noisy grey is
   rendered here instead (the table says which).
 
-Stages, each timed over the whole sequence (CPU time of the process, ``time.process_time``,
-which is what one dedicated core would take; wall-clock time is printed beside it because the
-machine may be shared): ``decode`` (``open_source`` only), ``+ detect``
-(decode and :class:`~mvtrack.detection.DisturbanceMap` with its SPEC §1.1 defaults) and
-``+ track`` (also :class:`~mvtrack.tracking.Tracker` with the ``default`` preset at the source's
-frame rate, and template matching of missed confirmed tracks). No video is written. Rendering
-the synthetic video is not timed. OpenCV runs on one thread (``cv2.setNumThreads(1)``) and BLAS
-is pinned to one thread before NumPy loads. Each figure is the median of ``--repeats`` runs;
-the decode share is median decode CPU time / median CPU time of the stage.
+Stages, each timed over the whole sequence: ``decode`` (``open_source`` only), ``+ detect``
+(decode and :class:`~mvtrack.detection.DisturbanceMap` with its SPEC §1.1 defaults),
+``+ track`` (also :class:`~mvtrack.tracking.Tracker` with the ``default`` preset at the
+source's frame rate) and ``+ track + templates`` (also template matching of stopped vehicles,
+:class:`~mvtrack.detection.template.TemplateRescuer` fed with the detector's mask). No video is
+written; rendering the synthetic video is not timed.
+
+Time is the CPU time of the process (``time.process_time``), what one dedicated core takes;
+wall-clock time is printed beside it because the machine may be shared. OpenCV runs on one
+thread (``cv2.setNumThreads(1)``) and BLAS is pinned to one thread before NumPy loads. After an
+untimed 50-frame warm-up per stage, each figure is the median of ``--repeats`` interleaved runs;
+the decode share is the median decode CPU time over the median CPU time of the stage.
 
 Usage::
 
@@ -101,7 +104,7 @@ def synthetic_video(folder: Path) -> tuple[Path, str]:
 
 
 def run_stage(
-    video: Path, stage: str, detector: str, templates: bool = True, max_frames: int | None = None
+    video: Path, stage: str, detector: str, max_frames: int | None = None
 ) -> tuple[int, float, float]:
     """Frames processed, CPU seconds and wall seconds for one pass of ``stage`` over ``video``."""
     with open_source(video) as src:
@@ -109,12 +112,12 @@ def run_stage(
         tracker = rescuer = None
         if stage != "decode":
             det = make_detector(detector)
-        if stage == "track":
+        if stage in ("track", "track+tm"):
             from mvtrack.detection.template import TemplateBank, TemplateRescuer
             from mvtrack.tracking import Tracker, preset
 
             tracker = Tracker(preset("default", fps=src.fps))
-            if templates:
+            if stage == "track+tm":
                 rescuer = TemplateRescuer(TemplateBank(), tracker, detector=det)
         n = 0
         c0, t0 = time.process_time(), time.perf_counter()
@@ -134,7 +137,7 @@ def run_stage(
 
 
 def bench(
-    video: Path, stages: list[str], repeats: int, detector: str, templates: bool
+    video: Path, stages: list[str], repeats: int, detector: str
 ) -> dict[str, tuple[float, float]]:
     """Median (CPU, wall) seconds per stage; repeats interleave the stages so that changes of
     load on the shared machine hit all stages alike."""
@@ -142,10 +145,10 @@ def bench(
     wall: dict[str, list[float]] = {s: [] for s in stages}
     n_frames = 0
     for s in stages:  # warm-up: lazy imports (SciPy) and first-call costs are not timed
-        run_stage(video, s, detector, templates, max_frames=50)
+        run_stage(video, s, detector, max_frames=50)
     for _ in range(repeats):
         for s in stages:
-            n_frames, c, w = run_stage(video, s, detector, templates)
+            n_frames, c, w = run_stage(video, s, detector)
             cpu[s].append(c)
             wall[s].append(w)
     med = {s: (statistics.median(cpu[s]), statistics.median(wall[s])) for s in stages}
@@ -159,7 +162,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--detector", default="disturbance-map")
     ap.add_argument("--no-track", action="store_true", help="skip the tracking stage")
-    ap.add_argument("--no-templates", action="store_true", help="track without template matching")
     ap.add_argument("--markdown", action="store_true", help="print a Markdown table too")
     args = ap.parse_args(argv)
     cv2.setNumThreads(1)
@@ -171,7 +173,7 @@ def main(argv: list[str] | None = None) -> int:
         except ImportError:
             print("tracker not available: timing decode + detect only", file=sys.stderr)
         else:
-            stages.append("track")
+            stages += ["track", "track+tm"]
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -185,7 +187,7 @@ def main(argv: list[str] | None = None) -> int:
         for video, desc in videos:
             with open_source(video) as src:
                 size = src.size
-            med = bench(video, stages, args.repeats, args.detector, not args.no_templates)
+            med = bench(video, stages, args.repeats, args.detector)
             n = med["frames"][0]
             for s in stages:
                 fps = n / med[s][0]
@@ -207,6 +209,7 @@ def main(argv: list[str] | None = None) -> int:
             "decode": "decode",
             "detect": "decode + detect",
             "track": "decode + detect + track",
+            "track+tm": "decode + detect + track + templates",
         }
         print()
         print(
