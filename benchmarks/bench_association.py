@@ -13,6 +13,7 @@ distance and rule, in ms per frame, and (with ``--md``) writes the Markdown tabl
 from __future__ import annotations
 
 import argparse
+import itertools
 import platform
 import time
 from collections.abc import Callable
@@ -64,6 +65,29 @@ def _median_ms(repeats: int, fn: Callable[..., Any], *args: Any, **kwargs: Any) 
         fn(*args, **kwargs)
         times.append(time.perf_counter() - t0)
     return 1e3 * float(np.median(times))
+
+
+def _growth(rows: list[tuple]) -> list[str]:
+    """Markdown lines: how the total time of each case grows per 10× N."""
+    by_case: dict[tuple[str, str], dict[int, float]] = {}
+    pairs: dict[tuple[str, str], dict[int, int]] = {}
+    for n, _m, dist, rule, p, _k, _g, _a, total in rows:
+        by_case.setdefault((dist, rule), {})[n] = total
+        pairs.setdefault((dist, rule), {})[n] = p
+    out = [
+        "",
+        "Growth of the total time per 10× N (×10 per decade is linear in N; the gated pairs",
+        "in brackets show how crowded the gate graph gets):",
+        "",
+    ]
+    for (dist, rule), t in by_case.items():
+        ns = sorted(t)
+        steps = [
+            f"{a}→{b}: ×{t[b] / t[a]:.1f} ({pairs[dist, rule][b]} pairs)"
+            for a, b in itertools.pairwise(ns)
+        ]
+        out.append(f"- {dist}, {rule}: " + "; ".join(steps))
+    return out
 
 
 def main() -> None:
@@ -122,6 +146,7 @@ def main() -> None:
         ]
         for r in rows:
             lines.append("| {} | {} | {} | {} | {} | {} | {:.3f} | {:.3f} | {:.3f} |".format(*r))
+        lines += _growth(rows)
         write_text(args.md, "\n".join(lines) + "\n")
         print(f"wrote {args.md}")
 

@@ -237,3 +237,23 @@ def test_bad_input_raises_value_error() -> None:
         )
     with pytest.raises(ValueError, match="dets must be"):
         distance_matrix("euclidean", x6_view(), np.zeros((3, 3)))
+
+
+@pytest.mark.parametrize("gate", [0.2, 0.5, 0.7, 0.95])
+def test_iou_radius_bound_is_valid_and_tighter_than_box_overlap(gate: float) -> None:
+    rng = np.random.default_rng(6)
+    wh = rng.uniform(2, 40, (50, 2))
+    view = TrackView.from_arrays(rng.uniform(0, 60, (50, 2)), wh=wh)
+    near = rng.integers(0, 50, 200)  # most detections near a track, with a similar box
+    z = np.vstack([view.xy[near] + rng.normal(0, 2, (200, 2)), rng.uniform(-10, 70, (100, 2))])
+    dwh = np.vstack([wh[near] * rng.uniform(0.8, 1.2, (200, 2)), rng.uniform(2, 40, (100, 2))])
+    dets = Detections(0, z, dwh)
+    d = distance_matrix("iou", view, dets)
+    radius = gate_radius("iou", view, dets, gate)
+    dist_px = np.linalg.norm(z[None, :, :] - view.xy[:, None, :], axis=2)
+    inside = d <= gate
+    assert inside.sum() > 20
+    assert np.all(dist_px[inside] <= radius[np.nonzero(inside)[0]] + 1e-9)
+    wmax = dwh.max(axis=0)
+    overlap_bound = 0.5 * np.hypot(view.wh[:, 0] + wmax[0], view.wh[:, 1] + wmax[1])
+    assert np.all(radius < overlap_bound)

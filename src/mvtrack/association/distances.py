@@ -355,11 +355,24 @@ def _radius_mahalanobis(
 
 
 def _radius_iou(view: TrackView, det_wh: FloatArray, gate: float) -> FloatArray:
+    r"""Centre-distance bound for ``1 − IoU <= gate``, i.e. IoU >= τ = 1 − gate.
+
+    The union is at least either box, so the overlap width o_x satisfies
+    τ w_t h_t <= o_x h_t and τ w_d h_d <= o_x h_d, i.e. o_x >= τ max(w_t, w_d); with
+    o_x <= (w_t + w_d)/2 − |Δx| this bounds |Δx| by (w_t + w_d)/2 − τ w_t and by
+    w_t/2 + (1/2 − τ) w_d, taken at the extreme detection width; likewise for y.
+    """
     if gate >= 1.0:  # every pair passes, even disjoint boxes
         return np.full(len(view), np.inf)
-    wmax = det_wh.max(axis=0) if det_wh.shape[0] else np.zeros(2)
-    # IoU > 0 needs overlap on both axes: |Δx| < (w_t + w_d)/2, |Δy| < (h_t + h_d)/2
-    return 0.5 * np.hypot(view.wh[:, 0] + wmax[0], view.wh[:, 1] + wmax[1])
+    tau = 1.0 - gate
+    if det_wh.shape[0] == 0:
+        return np.zeros(len(view))
+    wmax, wmin = det_wh.max(axis=0), det_wh.min(axis=0)
+    w_ext = wmax if tau <= 0.5 else wmin  # maximises (1/2 − τ) w_d
+    b1 = 0.5 * (view.wh + wmax) - tau * view.wh
+    b2 = 0.5 * view.wh + (0.5 - tau) * w_ext
+    b = np.clip(np.minimum(b1, b2), 0.0, None)  # (N, 2): bounds on |Δx|, |Δy|
+    return np.hypot(b[:, 0], b[:, 1])
 
 
 def _radius_unbounded(view: TrackView, det_wh: FloatArray, gate: float, **_: Any) -> FloatArray:
