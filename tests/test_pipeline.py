@@ -230,8 +230,9 @@ def test_no_video_skips_the_mp4(tmp_path) -> None:
 
 def _gate_probe(config, offset_dir: np.ndarray, factor: float) -> bool:
     """Track one target moving 2 px/frame for 12 frames, then put the next detection at
-    ``factor`` times the drawn gate's extent along ``offset_dir``; True if it is associated."""
-    from mvtrack.pipeline import next_gates
+    ``factor`` times the outermost drawn gate's extent along ``offset_dir`` (the second-stage
+    circle where the tracker has one); True if it is associated."""
+    from mvtrack.pipeline import next_gates, second_gates
     from mvtrack.tracking import Tracker
     from mvtrack.viz.annotate import gate_ellipses
 
@@ -242,6 +243,10 @@ def _gate_probe(config, offset_dir: np.ndarray, factor: float) -> bool:
         tracker.step(Detections(k, xy, [[10.0, 8.0]]))
     ids, center, shape, r2 = next_gates(tracker, 12)
     assert ids.size == 1
+    outer = second_gates(tracker, 12)
+    if outer is not None:
+        assert outer[1][0] > r2[0]  # euclidean first gate: the outer circle is wider
+        shape, r2 = np.eye(2)[None], outer[1]
     # distance to the boundary along offset_dir: t with (t u)ᵀ C⁻¹ (t u) = r²
     u = offset_dir / np.linalg.norm(offset_dir)
     t = np.sqrt(r2[0] / (u @ np.linalg.inv(shape[0]) @ u))

@@ -181,3 +181,18 @@ def test_trajectory_figure_and_rows(tmp_path) -> None:
     save_figure(fig, tmp_path / "traj.png")
     assert (tmp_path / "traj.png").stat().st_size > 1000
     assert sorted(p.name for p in tmp_path.iterdir()) == ["traj.png"]
+
+
+def test_outer_gate_circle_is_drawn_dimmer_and_wider() -> None:
+    from mvtrack.viz.annotate import OUTER_GATE_COLOR
+
+    frame = np.zeros((100, 100, 3), np.uint8)
+    tf = _frame(0, [1], [TrackState.CONFIRMED], [[50, 50]], wh=(4, 4))
+    out = annotate_frame(frame, tf, gate_center=np.array([[50.0, 50.0]]),
+                         gate_cov=np.eye(2)[None], gate_r2=10.0**2, outer_r2=30.0**2)
+    ys, xs = np.nonzero((np.abs(out.astype(int) - OUTER_GATE_COLOR).sum(axis=2) < 60)
+                        & out.any(axis=2))
+    r = np.hypot(xs - 50, ys - 50)
+    assert r.size > 50 and np.median(r) == pytest.approx(30.0, abs=1.0)
+    inner = np.nonzero(np.abs(out.astype(int) - GATE_COLOR).sum(axis=2) < 60)
+    assert np.median(np.hypot(inner[1] - 50, inner[0] - 50)) == pytest.approx(10.0, abs=1.0)

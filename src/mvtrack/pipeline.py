@@ -221,8 +221,9 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
       The closing is not scaled with the image: a larger one merges people walking side by
       side in 768×576 video. SPEC §1.1 [R] (opening only, area ≥ 20 px) is
       ``close_size = 0, min_area = 20``;
-    - the default tracker preset's Kalman predictors: measurement variance ``r = 4 s²`` px²
-      (SPEC §2.1 [R] gives 4 px² at 320×240; blob centroids jitter with the blob's size).
+    - the default tracker preset: measurement noise ``measurement_std = 2 s`` px, i.e.
+      ``r = 4 s²`` px² (SPEC §2.1 [R] gives 4 px² at 320×240, the preset's own value there;
+      blob centroids jitter with the blob's size).
 
     Values present in ``settings`` are kept; the paper presets are not touched.
     """
@@ -232,10 +233,9 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
     det.setdefault("min_area", float(round(40.0 * s2)))
     det.setdefault("close_size", 7)
     tracker = dict(settings.tracker)
-    predictor = str(tracker.get("predictor", "kalman-cv"))
-    if (tracker.get("preset", "default") == "default" and "predictor_params" not in tracker
-            and predictor.startswith("kalman")):
-        tracker["predictor_params"] = {"r": round(4.0 * s2, 3)}
+    if (tracker.get("preset", "default") == "default"
+            and not {"predictor_params", "measurement_std"} & set(tracker)):
+        tracker["measurement_std"] = round(2.0 * s2**0.5, 3)  # r = 4 s² px²
     return dataclasses.replace(settings, detector_params=det, tracker=tracker)
 
 
@@ -495,6 +495,22 @@ def next_gates(
     return np.asarray(tab.track_id)[keep], center, shape, r2
 
 
+def second_gates(tracker: Any, next_k: int) -> tuple[FloatArray, FloatArray] | None:
+    """The second association stage's circles for the next frame, or None without one.
+
+    Tracks the first stage leaves unmatched may take a leftover detection within
+    ``config.second_gate`` px of the same gate centre (gated global nearest neighbour, see
+    :class:`~mvtrack.tracking.Tracker`). Returns the centres (K, 2) and radii² (K,) for the
+    confirmed tracks, in the order of :func:`next_gates`. (The recovery stage, around the last
+    measurement of established tracks, is not drawn.)
+    """
+    radius = getattr(tracker.config, "second_gate", None)
+    if radius is None:
+        return None
+    _, center, _, _ = next_gates(tracker, next_k)
+    return center, np.full(center.shape[0], float(radius) ** 2)
+
+
 # --------------------------------------------------------------------------- whole runs
 
 
@@ -621,6 +637,9 @@ def track_to_folder(
             if settings.gates:
                 _, center, shape, r2 = next_gates(tracker, k + 1)
                 gates = {"gate_center": center, "gate_cov": shape, "gate_r2": r2}
+                outer = second_gates(tracker, k + 1)
+                if outer is not None:
+                    gates["outer_r2"] = outer[1]
             text = [f"frame {k}  tracks {len(tracks)}", label]
             img = annotate_frame(image, tracks, trails=trails, text=text, **gates)
             if writer is not None:

@@ -40,6 +40,8 @@ STATE_LABELS: dict[int, str] = {
 }
 #: colour of the gate outlines (BGR, yellow)
 GATE_COLOR: tuple[int, int, int] = (0, 230, 255)
+#: colour of the second-stage gate circles (BGR, dim yellow)
+OUTER_GATE_COLOR: tuple[int, int, int] = (0, 120, 140)
 #: palette of trail colours, chosen by ``track_id % len(TRAIL_PALETTE)``
 TRAIL_PALETTE: NDArray[np.uint8] = np.array(
     [
@@ -326,6 +328,7 @@ def annotate_frame(
     gate_center: FloatArray | None = None,
     gate_cov: FloatArray | None = None,
     gate_r2: float | FloatArray | None = None,
+    outer_r2: float | FloatArray | None = None,
     text: Sequence[str] = (),
 ) -> NDArray[np.uint8]:
     """A copy of ``frame`` (BGR or grey) with trails, gates, boxes, IDs and a text header.
@@ -340,12 +343,19 @@ def annotate_frame(
         Recent positions (push ``tracks`` into it before calling).
     gate_center, gate_cov, gate_r2 : optional
         Gate regions to draw (see :func:`draw_gates`); skipped when ``gate_cov`` is None.
+    outer_r2 : optional
+        Squared radii of a second, circular gate around the same centres (the tracker's
+        second association stage), drawn dimmer.
     text : sequence of str
         Lines written at the top left (frame number, settings).
     """
     img = frame.copy() if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
     if trails is not None:
         draw_trails(img, trails)
+    if gate_center is not None and outer_r2 is not None:
+        n = np.asarray(gate_center).reshape(-1, 2).shape[0]
+        draw_gates(img, gate_center, np.broadcast_to(np.eye(2), (n, 2, 2)), outer_r2,
+                   color=OUTER_GATE_COLOR)
     if gate_cov is not None and gate_center is not None and gate_r2 is not None:
         draw_gates(img, gate_center, gate_cov, gate_r2)
     draw_boxes(img, tracks)
