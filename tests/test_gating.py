@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mvtrack.association.distances import DISTANCES, TrackView, distance_matrix
 from mvtrack.association.gating import candidate_pairs, gate_mask
@@ -87,3 +89,27 @@ def test_grid_handles_far_tracks_negative_coordinates_and_tiny_gates() -> None:
         ref = candidate_pairs(view, z, "mahalanobis", gate, method="dense")
         for a, b in zip(got, ref, strict=True):
             np.testing.assert_array_equal(a, b)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 120),
+    st.integers(1, 120),
+    st.floats(1.0, 1e4),
+    st.sampled_from(["euclidean", "mahalanobis", "coupled", "iou"]),
+)
+def test_grid_equals_dense_on_random_scenes(
+    seed: int, n: int, m: int, scale: float, name: str
+) -> None:
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0, scale, (n, 2))
+    xy[: n // 4] = xy[0]  # some tracks on top of each other
+    cov = rng.uniform(0.1, 50, n)[:, None, None] * np.eye(2)
+    view = TrackView(xy, cov, cov + np.eye(2), rng.normal(0, 2, (n, 2)), rng.uniform(1, 50, (n, 2)))
+    z = np.vstack([xy[rng.integers(0, n, m)] + rng.normal(0, 5, (m, 2))])
+    dets = Detections(0, z, rng.uniform(1, 50, (m, 2)))
+    got = candidate_pairs(view, dets, name, method="grid")
+    ref = candidate_pairs(view, dets, name, method="dense")
+    for a, b in zip(got, ref, strict=True):
+        np.testing.assert_array_equal(a, b)
