@@ -257,3 +257,16 @@ def test_iou_radius_bound_is_valid_and_tighter_than_box_overlap(gate: float) -> 
     wmax = dwh.max(axis=0)
     overlap_bound = 0.5 * np.hypot(view.wh[:, 0] + wmax[0], view.wh[:, 1] + wmax[1])
     assert np.all(radius < overlap_bound)
+
+
+def test_track_view_from_predictor() -> None:
+    from mvtrack.filters.predictors import make_predictor
+
+    pred = make_predictor("kalman-cv", q=0.1, r=4.0)
+    state = pred.predict(pred.init(np.array([[10.0, 20.0], [30.0, 40.0]])))
+    view = TrackView.from_predictor(pred, state, np.full((2, 2), 8.0))
+    np.testing.assert_allclose(view.xy, [[10.0, 20.0], [30.0, 40.0]])
+    np.testing.assert_allclose(view.S, view.cov + 4.0 * np.eye(2))
+    z = np.array([[12.0, 21.0]])
+    d = distance_matrix("mahalanobis", view, z)[0, 0]
+    assert d == pytest.approx(np.array([2.0, 1.0]) @ np.linalg.solve(view.S[0], [2.0, 1.0]))
