@@ -158,6 +158,29 @@ def accuracy(xy: np.ndarray, wh: np.ndarray, log: TrackLog, iou: float = 0.5) ->
     }
 
 
+def variants() -> list[tuple[str, TrackerConfig]]:
+    """The default and one-change-at-a-time alternatives (docs/bench/tracker.md)."""
+    from mvtrack.tracking import paper1, paper2
+
+    return [
+        ("default", TrackerConfig()),
+        ("no second stage (10 px only)", TrackerConfig(second_gate=None)),
+        ("one stage, 20 px", TrackerConfig(gate=400.0, second_gate=None)),
+        ("no recovery stage", TrackerConfig(recover_speed=None)),
+        ("Mahalanobis χ² 9.21 + 20 px stage", TrackerConfig(distance="mahalanobis", gate=None)),
+        ("IoU 0.7 (general association path), one stage",
+         TrackerConfig(distance="iou", gate=None, second_gate=None)),
+        ("confirm on 3 hits, coast 0.5 s", TrackerConfig(confirm_hits=3, max_coast=0.5)),
+        ("greedy instead of optimal", TrackerConfig(assign="greedy")),
+        ("kalman-ca (q = 0.05)",
+         TrackerConfig(predictor="kalman-ca", predictor_params={"q": 0.05})),
+        ("rls", TrackerConfig(predictor="rls")),
+        ('`paper1("kalman-ca")` preset', paper1("kalman-ca")),
+        ('`paper1("rls")` preset', paper1("rls")),
+        ("`paper2(fps=30)` preset", paper2(fps=30.0)),
+    ]
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print the table (and optionally write JSON)."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -174,7 +197,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--confirm-hits", type=int, default=None)
     ap.add_argument("--max-coast", type=float, default=None)
     ap.add_argument("--json", default=None, help="also write the figures to this JSON file")
+    ap.add_argument("--variants", action="store_true",
+                    help="one run of each variant of the default (Markdown rows)")
     args = ap.parse_args(argv)
+    if args.variants:
+        print("| N | variant | CPU ms | MOTA | IDF1 | IDSW | FP | FN |")
+        print("|---|---|---|---|---|---|---|---|")
+        for n in args.n:
+            rng = np.random.default_rng(args.seed + n)
+            xy, wh = crowd_scene(n, args.frames, rng)
+            frames = crowd_detections(xy, wh, rng)
+            for name, cfg in variants():
+                cpu, _, log = run_tracker(cfg, frames)
+                a = accuracy(xy, wh, log)
+                print(f"| {n} | {name} | {1000 * cpu / args.frames:.3f} | {a['MOTA']:.3f} | "
+                      f"{a['IDF1']:.3f} | {a['IDSW']} | {a['FP']} | {a['FN']} |", flush=True)
+        return 0
 
     changes = {
         k: v
