@@ -371,7 +371,8 @@ def track_many(
         The scheduler cannot be reached, or ``out_root`` cannot be created.
     """
     settings = RunSettings() if settings is None else settings
-    if len(videos) == 0:
+    videos = list(videos)
+    if not videos:
         raise ValueError("track_many: no videos given")
     if workers is not None and scheduler is not None:
         raise ValueError("workers applies to a local cluster only; do not give it with scheduler")

@@ -82,7 +82,7 @@ def register(app: typer.Typer) -> None:
         videos: Annotated[
             list[str],
             typer.Argument(
-                metavar="VIDEO...",
+                metavar="VIDEO",
                 help="Video files, folders of videos, or quoted glob patterns ('clips/*.mp4')."
             ),
         ],
