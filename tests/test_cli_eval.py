@@ -74,3 +74,17 @@ def test_eval_output_has_no_import_noise(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert "pycocotools" not in proc.stdout + proc.stderr
     assert proc.stdout.splitlines()[0].split() == ["MOTA", "0.526"]
+
+
+def test_empty_prediction_gives_zero_mota_and_strict_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    pred = tmp_path / "empty.txt"
+    pred.write_text("")
+    out = tmp_path / "s.json"
+    args = ["eval", "--gt", str(CAMPUS / "gt.txt"), "--pred", str(pred), "--json", str(out)]
+    assert main(args) == 0
+    text = out.read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    scores = json.loads(text)
+    assert scores["MOTA"] == 0.0 and scores["FN"] == 359 and scores["MOTP"] is None

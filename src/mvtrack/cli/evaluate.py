@@ -70,8 +70,8 @@ def register(app: typer.Typer) -> None:
         scores = evaluate(gt, pred, iou)
         typer.echo(format_table(scores))
         if json is not None:
-            # NaN (e.g. MOTA without GT boxes) is not JSON: write null instead.
-            clean = {k: None if isinstance(v, float) and math.isnan(v) else v
+            # NaN and ±inf (e.g. MOTP without matches, MOTA without GT boxes) are not JSON.
+            clean = {k: None if isinstance(v, float) and not math.isfinite(v) else v
                      for k, v in scores.items()}
             write_json(json, {"gt": str(gt), "pred": str(pred), **clean})
             typer.echo(f"wrote {json}")
