@@ -265,3 +265,29 @@ def test_drawn_gate_is_the_trackers_gate(preset: str, direction: tuple[float, fl
     d = np.asarray(direction)
     assert _gate_probe(config, d, 0.97)
     assert not _gate_probe(config, d, 1.03)
+
+
+def test_size_dependent_defaults_scale_with_the_image() -> None:
+    from mvtrack.pipeline import resolve_settings
+    from mvtrack.tracking import TrackerConfig
+
+    base = TrackerConfig()
+    small = resolve_settings(RunSettings(), (320, 240))
+    assert small.detector_params == {"min_area": 40.0, "close_size": 7}
+    assert small.tracker == {"measurement_std": 2.0}
+    big = resolve_settings(RunSettings(), (640, 480))  # s² = 4
+    assert big.detector_params["min_area"] == 160.0 and big.detector_params["close_size"] == 7
+    assert big.tracker["measurement_std"] == 4.0
+    if base.distance == "euclidean" and base.gate is not None:
+        assert big.tracker["gate"] == pytest.approx(4 * base.gate)
+    if base.second_gate is not None:
+        assert big.tracker["second_gate"] == pytest.approx(2 * base.second_gate)
+    mine = resolve_settings(
+        RunSettings(tracker={"gate": 50.0, "measurement_std": 1.0},
+                    detector_params={"min_area": 5.0}), (640, 480))
+    assert mine.tracker["gate"] == 50.0 and mine.tracker["measurement_std"] == 1.0
+    assert mine.detector_params["min_area"] == 5.0
+    tiny = resolve_settings(RunSettings(), (96, 64))
+    assert tiny.tracker == {"measurement_std": 2.0} and tiny.detector_params["min_area"] == 3.0
+    paper = resolve_settings(RunSettings(tracker={"preset": "paper1"}), (640, 480))
+    assert paper.tracker == {"preset": "paper1"}

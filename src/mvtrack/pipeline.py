@@ -225,6 +225,12 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
       ``r = 4 s²`` px² (SPEC §2.1 [R] gives 4 px² at 320×240, the preset's own value there;
       blob centroids jitter with the blob's size).
 
+    - the default preset's pixel distances (its Euclidean gate, ``second_gate``,
+      ``recover_margin``) scaled by ``s`` (the gate, in px², by ``s²``). ``recover_speed``
+      stays: scaled, it let tracks hop 70 px per frame on 768×576 video at 10 fps.
+
+    The tracker values are only scaled up: images smaller than 320×240 keep them.
+
     Values present in ``settings`` are kept; the paper presets are not touched.
     """
     w, h = size
@@ -233,10 +239,29 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
     det.setdefault("min_area", float(round(40.0 * s2)))
     det.setdefault("close_size", 7)
     tracker = dict(settings.tracker)
-    if (tracker.get("preset", "default") == "default"
-            and not {"predictor_params", "measurement_std"} & set(tracker)):
-        tracker["measurement_std"] = round(2.0 * s2**0.5, 3)  # r = 4 s² px²
+    if tracker.get("preset", "default") == "default":
+        up = max(s2, 1.0)  # smaller images keep the 320×240 values
+        if not {"predictor_params", "measurement_std"} & set(tracker):
+            tracker["measurement_std"] = round(2.0 * up**0.5, 3)  # r = 4 s² px²
+        tracker.update(_scaled_pixel_fields(tracker, up))
     return dataclasses.replace(settings, detector_params=det, tracker=tracker)
+
+
+def _scaled_pixel_fields(tracker: dict[str, Any], s2: float) -> dict[str, Any]:
+    """Pixel-valued defaults of ``TrackerConfig`` scaled to an image ``s²`` times 320×240."""
+    from mvtrack.tracking import TrackerConfig
+
+    defaults = {f.name: f.default for f in dataclasses.fields(TrackerConfig)}
+    power = {"second_gate": 0.5, "recover_margin": 0.5}
+    if tracker.get("distance", defaults.get("distance")) == "euclidean":
+        power["gate"] = 1.0  # px², scales with the area
+    out = {}
+    for name, p in power.items():
+        value = defaults.get(name)
+        if name in tracker or not isinstance(value, (int, float)) or s2 == 1.0:
+            continue
+        out[name] = round(float(value) * s2**p, 3)
+    return out
 
 
 def build_detector(settings: RunSettings) -> Callable[[Image], Detections]:
