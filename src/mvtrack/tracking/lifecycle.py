@@ -46,9 +46,8 @@ def count_hits(ints: IntArray, matched: BoolArray, held: IntArray) -> None:
     tracks that got either); ``age`` counts frames since birth.
     """
     ints[:, HITS] += matched
-    ints[:, MISSES] += 1
+    ints[:, MISSES : AGE + 1] += 1  # misses and age (adjacent columns)
     ints[held, MISSES] = 0
-    ints[:, AGE] += 1
 
 
 def next_state(

@@ -354,11 +354,15 @@ class Tracker:
                 self._next_id = hand_out_ids(ints, confirmed_now, self._next_id)
             show = ~delete if self.config.output_tentative else ~delete & (state != TENTATIVE)
             rows = np.flatnonzero(show)
+            oi = ints[rows]
+            of = np.concatenate(  # one gather for all float columns of the output
+                [z, pred.position(ps), gxy, flo[:, WH], pred.velocity(ps)], axis=1
+            )[rows]
             out = (
-                ints[rows, TID], state[rows], det_index[rows], z[rows],
-                pred.position(ps)[rows], gxy[rows], flo[rows, WH], pred.velocity(ps)[rows],
+                oi[:, TID], oi[:, STATE], det_index[rows], of[:, 0:2], of[:, 2:4], of[:, 4:6],
+                of[:, 6:8], of[:, 8:10],
             )
-            out_uid = ints[rows, UID]
+            out_uid = oi[:, UID]
             tab = TrackTable(ints, flo)
             if delete.any():
                 keep = np.flatnonzero(~delete)
