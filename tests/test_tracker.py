@@ -291,7 +291,8 @@ def test_paper1_nearest_is_non_exclusive() -> None:
         {"fps": 0.0}, {"fps": float("nan")}, {"gate": -1.0}, {"confirm_hits": 0},
         {"max_coast": -0.1}, {"assign": "hungarian"}, {"size_smoothing": 0.0},
         {"confirm_window": 0.0}, {"init_velocity_std": -5.0}, {"warmup_hits": 1},
-        {"predictor": ""}, {"predictor_params": [1, 2]},
+        {"predictor": ""}, {"predictor_params": [1, 2]}, {"distance": "iou", "gate": 100.0},
+        {"recover_speed": 0.0}, {"second_gate": -2.0}, {"recover_window": 0.0},
     ],
 )
 def test_bad_config_values_raise_value_error(changes: dict) -> None:

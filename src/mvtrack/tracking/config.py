@@ -154,6 +154,9 @@ class TrackerConfig:
             raise bad("fps", "must be a finite number > 0")
         if self.gate is not None and not _finite_positive(self.gate):
             raise bad("gate", "must be a finite number > 0 or None")
+        if self.distance == "iou" and self.gate is not None and self.gate > 1.0:
+            raise bad("gate", "is a cost 1 − IoU for distance 'iou' and must be <= 1 "
+                      "(gate=None gives its default)")
         if not isinstance(self.confirm_hits, int) or self.confirm_hits < 1:
             raise bad("confirm_hits", "must be an integer >= 1")
         if self.confirm_window is not None and not _finite_positive(self.confirm_window):
