@@ -69,3 +69,33 @@ def test_vtest_whole_video(vtest_path, tmp_path) -> None:
     assert sorted(p.name for p in out.iterdir()) == [
         "results.txt", "summary.json", "trajectories.png"
     ]
+
+
+def test_real_ctrl_c_stops_cleanly(vtest_path, tmp_path) -> None:
+    """SIGINT (what Ctrl-C sends) to a running ``mvtrack track``: status 130, one line on
+    stderr, and the files of the frames tracked so far, with no temporary file left."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "vtest"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mvtrack", "track", str(vtest_path), "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    deadline = time.monotonic() + 60
+    while not out.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)  # the folder appears when the frame loop starts
+    time.sleep(1.0)
+    if proc.poll() is not None:
+        pytest.skip("the whole video was tracked before the signal could be sent")
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: interrupted after"), err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["interrupted"] is True and 0 < summary["frames"] < 795
+    assert (out / "tracks.mp4").stat().st_size > 0 and (out / "results.txt").exists()
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]
