@@ -245,6 +245,7 @@ def test_rescue_holds_a_stopped_track_and_a_detection_confirms_it_again() -> Non
     assert states[22 - 2 : 45 - 2] == [TrackState.STOPPED] * 23
     assert states[45 - 2 :] == [TrackState.CONFIRMED] * (n - 45)
     assert len(calls) == 23 and all(c[0].tolist() == [0] for c in calls)
+    assert tracker.row_uids.tolist() == [0]  # the uid the rescue callback saw, row-aligned
     np.testing.assert_array_equal(calls[0][2], WH)
     stopped = out[30]
     assert stopped.det_index.tolist() == [-1]

@@ -5,15 +5,25 @@ predictor's batch state; a frame costs a fixed number of array operations whatev
 of tracks, and no Python loop runs over tracks. The pipeline is SPEC §1.1 steps 4–5 (paper 1)
 and §2.1 steps 3–5 (paper 2):
 
-1. **predict** every track one frame (:meth:`Predictor.predict`);
-2. **gate** (track, detection) pairs with the configured distance and its gate
-   (:func:`mvtrack.association.gating.candidate_pairs`, spatially pre-gated);
-3. **assign** with the configured rule (:func:`mvtrack.association.assign.assign`);
+1. **predict** every track one frame (:meth:`Predictor.predict`, eqs. (6)–(7) of paper 1);
+   with ``warmup`` the gate centre is paper 1's ``2 y_k − y_{k−1}`` until 2M associations;
+2. **gate and assign** with the configured distance, gate and rule — through
+   :mod:`mvtrack.tracking.associate` for the disc-shaped gates (``euclidean``, and
+   ``mahalanobis`` with the closed-form ``kalman-cv``), otherwise through
+   :func:`mvtrack.association.candidate_pairs` and :func:`mvtrack.association.assign`;
+3. optionally a **second stage** (``second_gate``: a wider Euclidean gate for the tracks and
+   detections left over) and a **recovery stage** (``recover_speed``: an established track
+   that lost its target may take a leftover detection near its last measurement; its
+   predictor restarts there, so a target that bounced or turned keeps its ID);
 4. **rescue** (optional): confirmed tracks that got no detection are offered to the video
    pipeline's template matching; the ones it finds are held in state ``STOPPED``;
-5. **update** the predictors with the assigned measurements;
+5. **update** the predictors with the assigned measurements (eqs. (3)–(5) of paper 1);
 6. **life cycle** (:mod:`mvtrack.tracking.lifecycle`): confirm, coast, delete, and start new
    tentative tracks from the unassigned detections (new-target recognition, SPEC §2.1 step 4).
+
+``kalman-cv`` runs in the closed form of :mod:`mvtrack.tracking.fastkf` (the same filter as
+:mod:`mvtrack.filters.predictors`' ``kalman-cv``, tested equal to 1e-9); every other predictor
+is built by :func:`mvtrack.filters.predictors.make_predictor`.
 """
 
 from __future__ import annotations
@@ -212,6 +222,16 @@ class Tracker:
     ------
     ValueError
         Unknown predictor, distance or assignment rule, or bad parameters.
+
+    Attributes
+    ----------
+    tracks : TrackTable
+        The live tracks after the last step (tentative ones included).
+    pstate : dataclass
+        The predictor's batch state, row-aligned with ``tracks``.
+    row_uids : (K,) int64
+        Internal uids of the rows of the last returned :class:`~mvtrack.types.TrackFrame`
+        (the ids the ``rescue`` callback is given), row-aligned with it.
 
     Examples
     --------
