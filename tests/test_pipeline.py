@@ -296,6 +296,6 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
 def test_progress_bar_goes_to_stderr_only_when_asked(capsys) -> None:
     run_frames(_frames(5), one_blob_detector, CountingTracker(), progress=True, total=5)
     captured = capsys.readouterr()
-    assert "tracking" in captured.err and "5/5" in captured.err and captured.out == ""
+    assert "tracking:" in captured.err and "/5" in captured.err and captured.out == ""
     run_frames(_frames(5), one_blob_detector, CountingTracker(), total=5)  # not a terminal
     assert capsys.readouterr().err == ""
