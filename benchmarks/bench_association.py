@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from mvtrack.association import TrackView, assign, candidate_pairs
+from mvtrack.association.assign import _components
 from mvtrack.types import Detections
 
 CASES = [  # (distance, distance parameters, assignment rule, optimal solver); default gates
@@ -80,13 +81,13 @@ def _growth(rows: list[tuple]) -> list[str]:
     """Markdown lines: how the total time of each case grows per 10× N."""
     by_case: dict[tuple[str, str], dict[int, float]] = {}
     pairs: dict[tuple[str, str], dict[int, int]] = {}
-    for n, _m, dist, rule, p, _k, _g, _a, total, _w in rows:
+    for n, _m, dist, rule, p, _big, _k, _g, _a, total, _w in rows:
         by_case.setdefault((dist, rule), {})[n] = total
         pairs.setdefault((dist, rule), {})[n] = p
     out = [
         "",
-        "Growth of the total time per 10× N (×10 per decade is linear in N; the gated pairs",
-        "in brackets show how crowded the gate graph gets):",
+        "Growth of the total CPU time per 10× N (×10 per decade is linear in N; the gated",
+        "pairs in brackets show how crowded the gate graph gets):",
         "",
     ]
     for (dist, rule), t in by_case.items():
@@ -116,6 +117,11 @@ def main() -> None:
             if solver == "dense" and n > 1000:
                 continue  # one dense LSA per giant cluster: quadratic memory
             ti, dj, c = candidate_pairs(view, dets, dist, **params)
+            labels = _components(ti, dj, n, m)
+            used = np.zeros(n + m, dtype=bool)
+            used[ti] = True
+            used[n + dj] = True
+            largest = int(np.bincount(labels[used]).max()) if ti.size else 0
             t_gate, w_gate = _median_ms(args.repeats, candidate_pairs, view, dets, dist, **params)
             t_assign, w_assign = _median_ms(
                 args.repeats, assign, ti, dj, c, n, m, rule, solver=solver
@@ -127,6 +133,7 @@ def main() -> None:
                 dist,
                 rule if rule != "optimal" else f"optimal ({solver})",
                 ti.size,
+                largest,
                 len(a),
                 t_gate,
                 t_assign,
@@ -135,7 +142,7 @@ def main() -> None:
             )
             rows.append(row)
             print(
-                "N={:>6} M={:>6} {:<12} {:<18} pairs={:>7} matched={:>6} "
+                "N={:>6} M={:>6} {:<12} {:<18} pairs={:>7} largest cluster={:>6} matched={:>6} "
                 "gate {:8.3f} ms  assign {:8.3f} ms  total {:8.3f} ms (wall {:8.3f} ms)".format(
                     *row
                 ),
@@ -158,14 +165,26 @@ def main() -> None:
             "",
             "Command: `python benchmarks/bench_association.py --md docs/bench/association.md`",
             "",
-            "| N | M | distance | rule | gated pairs | matched | gate ms | assign ms | total ms "
-            "| wall total ms |",
-            "|---|---|---|---|---|---|---|---|---|---|",
+            "| N | M | distance | rule | gated pairs | largest cluster | matched | gate ms "
+            "| assign ms | total ms | wall total ms |",
+            "|---|---|---|---|---|---|---|---|---|---|---|",
         ]
         for r in rows:
             lines.append(
-                "| {} | {} | {} | {} | {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.3f} |".format(*r)
+                "| {} | {} | {} | {} | {} | {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.3f} |".format(
+                    *r
+                )
             )
+        lines += [
+            "",
+            "`largest cluster` is the number of tracks + detections in the biggest connected",
+            "component of the gate graph. The exact optimal assignment costs roughly linear",
+            "time while clusters stay small; once the gate is wide relative to the spacing of",
+            "the targets (the 20 px Euclidean gate at N = 10 000, where neighbours are ~14 px",
+            "apart) the graph percolates into one giant cluster and the sparse solve grows",
+            "faster than linearly. The χ² gates (mahalanobis, coupled) scale with the filters'",
+            "uncertainty and keep the clusters small.",
+        ]
         lines += _growth(rows)
         write_text(args.md, "\n".join(lines) + "\n")
         print(f"wrote {args.md}")
