@@ -131,3 +131,20 @@ def test_optimal_is_invariant_to_permuting_detections() -> None:
     assert set(zip(a[0].tolist(), a[1].tolist(), strict=True)) == set(
         zip(b[0].tolist(), perm[b[1]].tolist(), strict=True)
     )
+
+
+def test_dense_two_stage_equals_two_sparse_stages() -> None:
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        txy, dxy = _scene(rng, 30, 33, 120.0)
+        mt, md, ud = fa.dense_two_stage(txy, dxy, None, 25.0, 144.0)
+        t1, d1 = fa.optimal(*fa.gate_pairs(txy, dxy, None, 25.0), 30, 33, 25.0)
+        lt = np.setdiff1d(np.arange(30), t1)
+        ld = np.setdiff1d(np.arange(33), d1)
+        t2, d2 = fa.optimal(*fa.gate_pairs(txy[lt], dxy[ld], None, 144.0), lt.size, ld.size,
+                            144.0)
+        want = set(zip(t1.tolist(), d1.tolist(), strict=True)) | set(
+            zip(lt[t2].tolist(), ld[d2].tolist(), strict=True)
+        )
+        assert set(zip(mt.tolist(), md.tolist(), strict=True)) == want
+        np.testing.assert_array_equal(ud, np.setdiff1d(np.arange(33), md))

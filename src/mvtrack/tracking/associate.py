@@ -155,16 +155,16 @@ def dense_optimal(
 
 def dense_two_stage(
     txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float, gate2: float
-) -> tuple[IntArray, IntArray]:
+) -> tuple[IntArray, IntArray, IntArray]:
     """:func:`dense_optimal`, then a second stage on what is left.
 
     The tracks and detections left unmatched by the first stage are assigned again with the
     Euclidean gate ``gate2`` (px²) on the squared distance, from the same distance matrix.
-    Returns all matched (track, detection) rows, first stage first.
+    Returns all matched (track, detection) rows, first stage first, and the unassigned
+    detection rows.
     """
-    dx = dxy[:, 0] - txy[:, 0, None]
-    dy = dxy[:, 1] - txy[:, 1, None]
-    d2 = dx * dx + dy * dy  # eq. (8) of paper 2, squared
+    d = dxy[None, :, :] - txy[:, None, :]
+    d2 = (d * d).sum(axis=2)  # eq. (8) of paper 2, squared
     cost = d2 / scale[:, None] if scale is not None else d2.copy()
     u = 2.0 * gate
     cost[~(cost <= gate)] = u  # NaN never passes
@@ -172,22 +172,24 @@ def dense_two_stage(
     keep = cost[rows, cols] < u
     rows, cols = rows[keep], cols[keep]
     n, m = d2.shape
-    if rows.size == min(n, m):
-        return rows, cols
-    free_t = np.ones(n, dtype=bool)
-    free_t[rows] = False
     free_d = np.ones(m, dtype=bool)
     free_d[cols] = False
+    if rows.size == n or rows.size == m:
+        return rows, cols, np.flatnonzero(free_d)
+    free_t = np.ones(n, dtype=bool)
+    free_t[rows] = False
     lt, ld = np.flatnonzero(free_t), np.flatnonzero(free_d)
     sub = d2[lt[:, None], ld]
     ok = sub <= gate2
     if not ok.any():
-        return rows, cols
+        return rows, cols, ld
     u2 = 2.0 * gate2
     sub[~ok] = u2
     r2, c2 = linear_sum_assignment(sub)
     keep = sub[r2, c2] < u2
-    return np.concatenate([rows, lt[r2[keep]]]), np.concatenate([cols, ld[c2[keep]]])
+    r2, c2 = lt[r2[keep]], ld[c2[keep]]
+    free_d[c2] = False
+    return np.concatenate([rows, r2]), np.concatenate([cols, c2]), np.flatnonzero(free_d)
 
 
 def _first_of_runs(key: IntArray) -> NDArray[np.bool_]:

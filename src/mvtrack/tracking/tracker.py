@@ -437,10 +437,10 @@ class Tracker:
         staged = False
         if rule == "optimal" and not self._assign_params and n * m <= fast_assoc.DENSE_LSA:
             if self._gate2 is not None:  # both stages from one distance matrix
-                mt, md = fast_assoc.dense_two_stage(
+                mt, md, ud = fast_assoc.dense_two_stage(
                     gxy, dets.xy, scale, self._gate, self._gate2
                 )
-                staged = True
+                return mt, md, ud, True
             else:
                 mt, md = fast_assoc.dense_optimal(gxy, dets.xy, scale, self._gate)
         elif rule == "optimal" and not self._assign_params:
