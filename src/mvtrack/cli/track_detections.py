@@ -33,12 +33,16 @@ def register(app: typer.Typer) -> None:
         ] = "default",
         predictor: Annotated[
             str | None,
-            typer.Option(help="kalman-ca, kalman-cv, kalman-coupled or rls (default: preset's)."),
+            typer.Option(
+                help="kalman-ca, kalman-cv, kalman-coupled, rls or structured "
+                "(default: the preset's)."
+            ),
         ] = None,
         distance: Annotated[
             str | None,
             typer.Option(
-                help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis or iou."
+                help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis or iou "
+                "(default: the preset's)."
             ),
         ] = None,
         assign: Annotated[
@@ -49,7 +53,8 @@ def register(app: typer.Typer) -> None:
             typer.Option(
                 help="Gate on the distance value: px² for euclidean (400 = 20 px), χ² for "
                 "mahalanobis/uncoupled/coupled (9.21 = 99 %), 1 − IoU for iou. "
-                "Default: the distance's."
+                "Default: the preset's (default preset: 100 = 10 px, followed by a 20 px "
+                "second stage), or the distance's own when --distance is given."
             ),
         ] = None,
         fps: Annotated[
@@ -68,7 +73,7 @@ def register(app: typer.Typer) -> None:
         from mvtrack.tracking import Tracker, TrackLog
         from mvtrack.tracking import preset as make_preset
 
-        _check_choice("--predictor", predictor, PREDICTORS)
+        _check_choice("--predictor", predictor, [*PREDICTORS, "structured"])
         _check_choice("--distance", distance, DISTANCES)
         _check_choice("--assign", assign, ASSIGN_RULES)
         changes = {
