@@ -299,3 +299,101 @@ def test_progress_bar_goes_to_stderr_only_when_asked(capsys) -> None:
     assert "tracking:" in captured.err and "/5" in captured.err and captured.out == ""
     run_frames(_frames(5), one_blob_detector, CountingTracker(), total=5)  # not a terminal
     assert capsys.readouterr().err == ""
+
+
+def _stop_video(n: int = 200, seed: int = 1) -> list[np.ndarray]:
+    """Box A (textured, two-tone) drives right at 2 px/frame from frame 10 and stops at frame
+    40; box B appears at frame 20 and never moves. Textured grey road, noise σ = 2."""
+    rng = np.random.default_rng(seed)
+    h, w = 120, 200
+    road = (90 + 8 * rng.standard_normal((h, w))).clip(0, 255)
+    car = np.zeros((10, 16))
+    car[:, :8], car[:, 8:] = 200, 150
+    car[3:7, 2:14] = 40  # windows: texture for the template
+    frames = []
+    for k in range(n):
+        img = road.copy()
+        if k >= 10:
+            x = 20 + 2 * (min(k, 40) - 10)
+            img[40:50, x : x + 16] = car
+        if k >= 20:
+            img[85:95, 150:166] = car[:, ::-1]
+        img = img + rng.normal(0, 2.0, img.shape)
+        frames.append(np.repeat(img.clip(0, 255).astype(np.uint8)[..., None], 3, axis=2))
+    return frames
+
+
+def _ids_near(log, xy: tuple[float, float], frames: range) -> dict[int, tuple[int, int]]:
+    """Per frame in ``frames``: (track id, state) of the row within 8 px of ``xy``."""
+    out = {}
+    for tf in log:
+        if tf.frame in frames and len(tf):
+            d = np.hypot(*(tf.filtered_xy - np.asarray(xy)).T)
+            i = int(d.argmin())
+            if d[i] <= 8.0:
+                out[tf.frame] = (int(tf.track_id[i]), int(tf.state[i]))
+    return out
+
+
+def test_a_stopped_vehicle_keeps_its_id_by_template_matching(tmp_path) -> None:
+    from mvtrack.types import TrackState
+
+    frames = _stop_video()
+    a_xy, b_xy = (87.5, 44.5), (157.5, 89.5)  # where A stands from frame 40, where B stands
+    with_t = track_to_folder(frames, fps=30.0, size=(200, 120), out=tmp_path / "t",
+                             settings=RunSettings(video=False), progress=False)
+    late = range(150, 200)  # long after A's blob has faded into the background
+    held = _ids_near(with_t.log, a_xy, late)
+    assert len(held) == len(late), "A is lost once it stops"
+    ids = {i for i, _ in held.values()}
+    assert len(ids) == 1
+    assert all(s == int(TrackState.STOPPED) for _, s in held.values())
+    # ... and it is the ID A had while driving
+    moving = _ids_near(with_t.log, (60.0, 44.5), range(25, 27))
+    assert moving and {i for i, _ in moving.values()} == ids
+    # B never moved: nothing is held there once it has faded
+    assert not _ids_near(with_t.log, b_xy, late)
+    # without template matching A is lost too
+    without = track_to_folder(frames, fps=30.0, size=(200, 120), out=tmp_path / "n",
+                              settings=RunSettings(video=False, templates=False),
+                              progress=False)
+    assert not _ids_near(without.log, a_xy, late)
+
+
+def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() -> None:
+    """The guard around the NCC search: moved since birth, found where last measured, and not
+    covered by a detection — checked on a stand-in search that finds every track."""
+    from types import SimpleNamespace
+
+    from mvtrack.pipeline import StoppedVehicleRescuer
+
+    class FindsAll:
+        def __init__(self) -> None:
+            self.offset = np.zeros((4, 2))
+
+        def callback(self, image):
+            return lambda uids, xy, wh: (np.ones(len(uids), bool), xy + self.offset[uids])
+
+        def observe(self, image, dets, tracks):
+            pass
+
+    inner = FindsAll()
+    tracker = SimpleNamespace(tracks=None)
+    guard = StoppedVehicleRescuer(inner, tracker, min_travel=10.0, max_shift=4.0)
+    births = np.array([[0.0, 0.0], [50.0, 0.0], [100.0, 0.0], [150.0, 0.0]])
+    now = births + np.array([[20.0, 0.0], [0.0, 1.0], [20.0, 0.0], [20.0, 0.0]])
+    image = np.zeros((10, 10, 3), np.uint8)
+    empty = Detections.empty(0)
+    for last in (births, now):  # tracks 0, 2, 3 travel 20 px; track 1 stays put
+        tracker.tracks = SimpleNamespace(uid=np.arange(4), last_xy=last)
+        guard.observe(image, empty, TrackFrame.empty(0))
+    inner.offset[2] = (6.0, 0.0)  # track 2's match lies 6 px from where it was last seen
+    covering = Detections(1, [now[3] + 2.0], [[10.0, 10.0]])  # a detection covers track 3's
+    rescue = guard.callback(image, covering)
+    found, xy = rescue(np.arange(4), now.copy(), np.full((4, 2), 8.0))
+    assert found.tolist() == [True, False, False, False]
+    np.testing.assert_allclose(xy[0], now[0])
+    assert np.isnan(xy[1:]).all()
+    # a track the guard has never seen is not rescued either
+    f2, _ = guard.callback(image, empty)(np.array([9]), np.zeros((1, 2)), np.ones((1, 2)))
+    assert not f2.any()
