@@ -92,6 +92,10 @@ def test_crossing_report_keys_and_ranges() -> None:
         for rule in ASSIGN_RULES:
             assert f["failure_rate"][dist][rule] >= f["swap_rate"][dist][rule]
     assert f["runs"] == 3 and "paper" in f
+    # ρ = 1 with equal per-axis variances is eq. (9): the same choices, the same rates
+    assert f["coupled_rho_sweep"]["1"] == f["swap_rate"]["uncoupled"]
+    assert f["coupled_rho_sweep_jitter"]["1"] == f["swap_rate_jitter"]["uncoupled"]
+    assert set(f["coupled_rho_sweep"]) == {"1", "1.5", "3", "4"}
     assert set(report.plots) == {"trajectories", "swap_rates"}
     with pytest.raises(ValueError, match="runs"):
         crossing.run(runs=0, seed=0)
