@@ -91,6 +91,11 @@ def _spatial_pairs(
     if n == 0 or m == 0:
         e = np.zeros(0, dtype=np.intp)
         return e, e.copy()
+    rmin, rmax = float(radius.min()), float(radius.max())
+    if np.isfinite(rmax) and rmax <= 2.0 * rmin:  # the usual case: one common radius scale
+        ti, dj = _grid_pairs(track_xy, det_xy, radius, np.arange(n))
+        order = np.argsort(ti.astype(np.int64) * m + dj, kind="stable")
+        return ti[order], dj[order]
     finite = np.isfinite(radius)
     ref = np.median(radius[finite]) if finite.any() else 0.0
     common = finite & (radius <= 2.0 * ref)
