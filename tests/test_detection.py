@@ -266,3 +266,22 @@ def test_disturbance_map_finds_a_plausible_number_of_pedestrians_in_vtest(vtest_
     assert min(areas) >= 20
     # pedestrians are a few hundred to a few thousand pixels at this scale
     assert 100 <= np.percentile(areas, 90) <= 20000
+
+
+def test_frame_differencing_splits_a_uniform_object_the_disturbance_map_keeps_whole() -> None:
+    # paper 1's reason to reject frame differencing: a uniform object's interior cancels, so
+    # one 20×20 square moving 4 px/frame gives two edge strips; the disturbance map one blob
+    def big(k: int):
+        return None if k < 30 else (10 + 4 * (k - 30), 40)
+
+    rng = np.random.default_rng(5)
+    fd, dm = FrameDifference(), DisturbanceMap()
+    for k in range(50):
+        img = np.clip(rng.normal(100, 3, (H, W)), 0, 255).astype(np.uint8)
+        tl = big(k)
+        if tl is not None:
+            img[tl[1] : tl[1] + 20, tl[0] : tl[0] + 20] = 200
+        f, d = fd(img), dm(img)
+    assert len(f) == 2
+    np.testing.assert_array_equal(np.sort(f.wh[:, 0]), [4, 4])
+    assert len(d) == 1 and tuple(d.wh[0]) == (20, 20)
