@@ -126,9 +126,9 @@ def test_interrupt_cancels_pending_and_writes_batch_json(videos, tmp_path, sched
     def stop(item: BatchItem) -> None:
         raise KeyboardInterrupt
 
-    order = [videos["boxes"]] + [videos["cam_a"]] * 1 + [videos["cam_b"]] * 1
-    # six jobs (the same files under different folder names) on two workers
-    many = order + [tmp_path / f"copy{i}" / "cam.mp4" for i in range(3)]
+    # six jobs (three of them copies under other folder names) on two workers
+    many = [videos["boxes"], videos["cam_a"], videos["cam_b"]]
+    many += [tmp_path / f"copy{i}" / "cam.mp4" for i in range(3)]
     for i in range(3):
         (tmp_path / f"copy{i}").mkdir()
         (tmp_path / f"copy{i}" / "cam.mp4").write_bytes(videos["cam_a"].read_bytes())
@@ -144,6 +144,55 @@ def test_interrupt_cancels_pending_and_writes_batch_json(videos, tmp_path, sched
     for it in items:
         if it.status == "ok":
             assert (Path(it.out) / "results.txt").exists()
+
+
+@pytest.mark.slow
+def test_ctrl_c_in_a_terminal_stops_workers_and_exits_130(videos, tmp_path) -> None:
+    """SIGINT to the whole process group, as a terminal sends it: only the client handles it
+    (no worker tracebacks), the local workers stop, batch.json says what finished."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    psutil = pytest.importorskip("psutil")  # installed with distributed
+    folder = tmp_path / "in"
+    folder.mkdir()
+    full = write_video(x4_nine_vehicles(), folder / "v0.mp4", progress=False)
+    for i in range(1, 6):
+        (folder / f"v{i}.mp4").write_bytes(full.read_bytes())
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mvtrack", "batch", str(folder), "--out", str(out),
+         "--workers", "2"],
+        start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            time.sleep(0.1)
+            try:
+                if json.loads((out / "batch.json").read_text())["ok"] >= 1:
+                    break
+            except (OSError, ValueError):
+                pass
+        workers = psutil.Process(proc.pid).children(recursive=True)
+        assert workers, "no worker processes"
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert "error: interrupted" in err
+    time.sleep(0.5)
+    assert not [p for p in workers if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
+    data = json.loads((out / "batch.json").read_text())
+    assert data["interrupted"] is True and data["pending"] == 0
+    assert data["ok"] >= 1 and data["cancelled"] >= 1 and data["ok"] + data["cancelled"] == 6
+    assert [p for p in out.rglob(".*") if p.is_file()] == []  # no half-written files
 
 
 def test_track_video_never_raises(tmp_path) -> None:

@@ -36,7 +36,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -317,7 +317,7 @@ def _summary(
 
 
 def track_many(
-    videos: Sequence[str | os.PathLike[str]],
+    videos: Iterable[str | os.PathLike[str]],
     out_root: str | os.PathLike[str],
     settings: RunSettings | None = None,
     *,
@@ -333,7 +333,7 @@ def track_many(
 
     Parameters
     ----------
-    videos : sequence of path or str
+    videos : iterable of path or str
         Video files, image folders or stream URLs (anything ``mvtrack track`` opens).
     out_root : path
         Folder of the per-video folders (named by :func:`output_names`) and ``batch.json``.
@@ -480,7 +480,15 @@ def _connect(stack: contextlib.ExitStack, scheduler: str | None, n_workers: int,
     if scheduler is None:
         # Ctrl-C in a terminal reaches the whole process group; the worker processes inherit
         # an ignored SIGINT so that only this process handles it (and closes the cluster).
-        with _sigint_ignored():
+        # Dask sets MALLOC_TRIM_THRESHOLD_=65536 in its workers to hand memory back to the OS
+        # sooner; it also turns off glibc's adaptive mmap threshold, so every frame-sized
+        # array is mmap'ed, zeroed and unmapped again: 10-15 % more CPU per video here
+        # (benchmarks/bench_batch.py). A video's memory is freed when its task ends anyway.
+        import dask
+
+        with _sigint_ignored(), dask.config.set(
+            {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+        ):
             cluster = stack.enter_context(LocalCluster(
                 n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                 dashboard_address=None, silence_logs=logging.ERROR,
