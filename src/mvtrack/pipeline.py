@@ -415,14 +415,15 @@ class StoppedVehicleRescuer:
             moved = known & (self._travel[pos] >= self.min_travel)
             if not moved.any():
                 return found, xy
-            f_sub, xy_sub = search(uids[moved], np.asarray(predicted_xy)[moved],
-                                   np.asarray(wh)[moved])
-            found[moved] = np.asarray(f_sub, bool)
-            xy[moved] = np.asarray(xy_sub, np.float64)
-            # the match must sit where the vehicle was last measured (it stands still)
+            # a stopped vehicle stands where it was last measured: search around that place,
+            # not around the prediction, which keeps drifting with the last velocity estimate
             order = np.argsort(tab.uid)
             at = order[np.searchsorted(tab.uid[order], uids)]
             last = tab.last_xy[at]
+            f_sub, xy_sub = search(uids[moved], last[moved], np.asarray(wh)[moved])
+            found[moved] = np.asarray(f_sub, bool)
+            xy[moved] = np.asarray(xy_sub, np.float64)
+            # the match must sit where the vehicle was last measured (it stands still)
             found &= np.hypot(*(xy - last).T) <= self.max_shift
             # and no detection may cover it (a detected object has not faded)
             if len(dets) and found.any():

@@ -47,6 +47,7 @@ def track_scene(
     templates: bool = True,
     frames: list[NDArray[np.uint8]] | None = None,
     prime: int = 0,
+    template_params: dict[str, Any] | None = None,
 ) -> SceneRun:
     """Render ``scene`` with ``seed`` (or use ``frames``), track it, match to the truth.
 
@@ -67,7 +68,8 @@ def track_scene(
         for _ in range(prime):
             det(empty)
     tracker = Tracker(config)
-    rescuer = build_rescuer(RunSettings(), tracker) if templates else None
+    rescue_settings = RunSettings(template_params=dict(template_params or {}))
+    rescuer = build_rescuer(rescue_settings, tracker) if templates else None
     source = frames if frames is not None else render_frames(scene, seed)
     result = run_frames(source, det, tracker, rescuer=rescuer, progress=False)
     log = TrackLog()

@@ -43,7 +43,10 @@ PAPER = {
 }
 #: the blob stage exactly as SPEC §1.1 [R] (3×3 opening, area ≥ 20 px, no closing)
 SPEC_BLOBS = {"close_size": 0, "min_area": 20.0}
-WAIT = (60, 300)  # frames the waiting vehicles stand at the stop line (SPEC X5)
+WAIT = (60, 300)
+#: a looser NCC threshold than SPEC §1.1 [R]'s 0.8, reported as a variant: under the scene's
+#: noise and sub-pixel jitter a standing vehicle's NCC hovers around 0.75-0.82
+LOOSE_NCC = 0.7  # frames the waiting vehicles stand at the stop line (SPEC X5)
 MIN_ASSOC = 5
 COVER = 0.8
 
@@ -120,7 +123,7 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
     spurious_spec = {n: [] for n in names}
     scores_spec = {n: [] for n in names}
     totals = {c: 0 for c in CATEGORIES}
-    keeps = {n: {"templates": 0, "no_templates": 0} for n in names}
+    keeps = {n: {"templates": 0, "no_templates": 0, "templates_ncc_0.7": 0} for n in names}
     n_waiting = 0
     spurious = {n: [] for n in names}
     causes = {n: {} for n in names}
@@ -155,7 +158,10 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
                 )
             spurious_spec[name].append(summ_spec["spurious"])
             scores_spec[name].append(_score(spec))
-            w_t, w_n = _waiting(with_t), _waiting(without)
+            loose = track_scene(scene, cfg, seed=s, frames=frames, templates=True,
+                                template_params={"min_score": LOOSE_NCC})
+            w_t, w_n, w_l = _waiting(with_t), _waiting(without), _waiting(loose)
+            keeps[name]["templates_ncc_0.7"] += sum(w["keeps_id"] for w in w_l)
             keeps[name]["templates"] += sum(w["keeps_id"] for w in w_t)
             keeps[name]["no_templates"] += sum(w["keeps_id"] for w in w_n)
             spurious[name].append(summ["spurious"])
@@ -194,10 +200,7 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
                        "idf1": {n: mean(n, "IDF1", scores_spec) for n in names},
                        "spurious_tracks": spurious_spec},
         "detector_params": resolve_settings(RunSettings(), (320, 240)).detector_params,
-        "waiting_keep_id": {
-            n: {"templates": keeps[n]["templates"], "no_templates": keeps[n]["no_templates"],
-                "total": n_waiting} for n in names
-        },
+        "waiting_keep_id": {n: keeps[n] | {"total": n_waiting} for n in names},
         "spurious_tracks": {n: spurious[n] for n in names},
         "spurious_causes": causes,
         "mota": {n: mean(n, "MOTA") for n in names},
@@ -222,6 +225,8 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
                  *(f"{keeps[n]['templates']}/{n_waiting}" for n in names)])
     rows.append(["waiting vehicles keep their ID (no template matching)", "—",
                  *(f"{keeps[n]['no_templates']}/{n_waiting}" for n in names)])
+    rows.append([f"waiting vehicles keep their ID (template matching, NCC ≥ {LOOSE_NCC})", "—",
+                 *(f"{keeps[n]['templates_ncc_0.7']}/{n_waiting}" for n in names)])
     rows.append(["spurious tracks per run (median)", "some (> 0)",
                  *(f"{np.median(spurious[n]):g}" for n in names)])
     rows.append(["MOTA (mean over runs)", "—", *(figures["mota"][n] for n in names)])
@@ -244,6 +249,9 @@ Counts pair output rows with the visible ground truth per frame (Hungarian on ce
 distance ≤ max(6 px, 0.75 × box size)); a vehicle is tracked when one track holds ≥ 80 % of
 its visible frames. Spurious: tracks with ≥ {MIN_ASSOC} associations paired with no vehicle
 in most of their frames, sorted by where they sit (pole, beside a vehicle, elsewhere).
+Template matching uses SPEC §1.1 [R]'s NCC ≥ 0.8; the variant with NCC ≥ {LOOSE_NCC} is
+reported because under this scene's noise and sub-pixel jitter the NCC of a standing
+vehicle against its last detected appearance hovers around 0.75–0.82.
 MOTA/IDF1 use IoU ≥ 0.5 on the boxes, which is strict for 16×9 px vehicles whose blob box
 includes part of the disturbance-map trail. Times are medians on a shared 2-core machine.
 """
