@@ -91,6 +91,21 @@ def crowd_detections(
     return out
 
 
+def sim_scene(
+    n: int, frames: int, seed: int
+) -> tuple[np.ndarray, np.ndarray, list[Detections]]:
+    """The same scene from the project's simulator (:func:`mvtrack.sim.scenes.crowd`, which
+    keeps the speed inside 1–6 px/frame and reflects the whole box inside the image)."""
+    from mvtrack.sim.detections import detections_from_scene
+    from mvtrack.sim.scenes import crowd
+
+    scene = crowd(n, frames, seed=seed)
+    xy = scene.xy.reshape(frames, n, 2)
+    wh = scene.wh.reshape(frames, n, 2)[0]
+    dets = detections_from_scene(scene, np.random.default_rng(seed + 1))
+    return xy, wh, dets
+
+
 def run_tracker(
     config: TrackerConfig, frames: list[Detections]
 ) -> tuple[float, float, TrackLog]:
@@ -197,6 +212,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--confirm-hits", type=int, default=None)
     ap.add_argument("--max-coast", type=float, default=None)
     ap.add_argument("--json", default=None, help="also write the figures to this JSON file")
+    ap.add_argument("--scene", choices=("own", "sim"), default="own",
+                    help="generate the scene here (own) or with mvtrack.sim (sim)")
     ap.add_argument("--variants", action="store_true",
                     help="one run of each variant of the default (Markdown rows)")
     args = ap.parse_args(argv)
@@ -235,9 +252,12 @@ def main(argv: list[str] | None = None) -> int:
           f"{'IDF1':>6} {'IDSW':>5} {'FP':>6} {'FN':>7}")
     results = []
     for n in args.n:
-        rng = np.random.default_rng(args.seed + n)
-        xy, wh = crowd_scene(n, args.frames, rng)
-        frames = crowd_detections(xy, wh, rng)
+        if args.scene == "sim":
+            xy, wh, frames = sim_scene(n, args.frames, args.seed + n)
+        else:
+            rng = np.random.default_rng(args.seed + n)
+            xy, wh = crowd_scene(n, args.frames, rng)
+            frames = crowd_detections(xy, wh, rng)
         times, walls = [], []
         log = None
         for _ in range(args.repeats):
