@@ -130,7 +130,7 @@ class TrackerConfig:
     tentative_max_coast: float = 0.0
     measurement_std: float | None = 2.0
     init_velocity_std: float | None = 150.0
-    accel_std: float | None = 500.0
+    accel_std: float | None = 200.0
     second_gate: float | None = 20.0
     recover_speed: float | None = 250.0
     recover_margin: float = 6.0
@@ -286,7 +286,7 @@ def paper2(distance: str = "coupled", fps: float = 15.0) -> TrackerConfig:
 def default(fps: float = 30.0) -> TrackerConfig:
     """The modern default, ``TrackerConfig(fps=fps)`` (chosen by the crowd benchmark,
     docs/bench/tracker.md): closed-form per-axis constant-velocity KF (σ_z = 2 px,
-    σ_a = 500 px/s², velocity prior 150 px/s); association in stages, each the gated global
+    σ_a = 200 px/s², velocity prior 150 px/s); association in stages, each the gated global
     nearest neighbour (``optimal``): a 10 px Euclidean gate, then 20 px for the tracks and
     detections left over, then the recovery stage (250 px/s from the last measurement) for
     established targets that turned or bounced; confirmation on 2 consecutive hits and
