@@ -257,3 +257,34 @@ def test_optimal_with_leaf_peeling_equals_reference_on_geometric_scenes(
             got = a.cost.sum() + uu * (n + m - 2 * len(a)) / 2
             assert got == pytest.approx(_augmented_optimum(c, uu), rel=1e-9, abs=1e-9)
             assert len(set(a.det.tolist())) == len(a) == len(set(a.track.tolist()))
+
+
+@pytest.mark.parametrize("u", [None, 6.0, 12.0])
+def test_many_two_by_two_clusters_match_the_reference(u: float | None, monkeypatch) -> None:
+    """Block-diagonal frame of 2 × 2 conflicts (the closed-form path), some with a pair cut."""
+    import sys
+
+    module = sys.modules["mvtrack.association.assign"]
+    rng = np.random.default_rng(16)
+    k = 120
+    c = np.full((2 * k, 2 * k), np.inf)
+    for b in range(k):
+        block = rng.uniform(0, 10, (2, 2))
+        if b % 3 == 0:
+            block[rng.integers(2), rng.integers(2)] = np.inf
+        c[2 * b : 2 * b + 2, 2 * b : 2 * b + 2] = block
+    perm_t, perm_d = rng.permutation(2 * k), rng.permutation(2 * k)
+    c = c[perm_t][:, perm_d]  # clusters scattered over the rows
+    calls = {"n": 0}
+    original = module._solve_2x2
+
+    def counting(*args):  # type: ignore[no-untyped-def]
+        calls["n"] += 1
+        return original(*args)
+
+    monkeypatch.setattr(module, "_solve_2x2", counting)
+    a = assign(*_pairs(c), 2 * k, 2 * k, "optimal", unmatched_cost=u)
+    assert calls["n"] == 1
+    uu = 2 * np.abs(c[np.isfinite(c)]).max() * (1 + 1e-9) + 1e-12 if u is None else u
+    got = a.cost.sum() + uu * (4 * k - 2 * len(a)) / 2
+    assert got == pytest.approx(_augmented_optimum(c, uu), rel=1e-9)

@@ -251,6 +251,60 @@ def _solve_sparse(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDA
     return chosen
 
 
+def _solve_2x2(
+    t: IntArray, d: IntArray, c: FloatArray, lab: IntArray, u: float
+) -> NDArray[np.bool_]:
+    """Optimal matching of many clusters of exactly two tracks and two detections at once.
+
+    Each cluster's 2 × 2 weight matrix w = u − cost (−∞ where there is no pair) is scored for
+    the seven matchings (empty, four single pairs, two full ones); the best per cluster is
+    kept. Ties go to the first in the order: diagonal, anti-diagonal, single pairs.
+    """
+    ulab, cl = np.unique(lab, return_inverse=True)
+    k = ulab.size
+    big = np.iinfo(np.intp).max
+    tmin = np.full(k, big)
+    np.minimum.at(tmin, cl, t)
+    dmin = np.full(k, big)
+    np.minimum.at(dmin, cl, d)
+    tl = (t != tmin[cl]).astype(np.intp)  # local row 0 / 1 (lower / higher track row)
+    dl = (d != dmin[cl]).astype(np.intp)
+    w = np.full((k, 2, 2), -np.inf)
+    w[cl, tl, dl] = u - c
+    pos = np.full((k, 2, 2), -1, dtype=np.intp)
+    pos[cl, tl, dl] = np.arange(t.shape[0])
+    options = np.stack(
+        [
+            w[:, 0, 0] + w[:, 1, 1],
+            w[:, 0, 1] + w[:, 1, 0],
+            w[:, 0, 0],
+            w[:, 0, 1],
+            w[:, 1, 0],
+            w[:, 1, 1],
+            np.zeros(k),
+        ],
+        axis=1,
+    )
+    best = np.argmax(options, axis=1)  # first maximum wins
+    picks = np.array(
+        [
+            [(0, 0), (1, 1)],
+            [(0, 1), (1, 0)],
+            [(0, 0), (0, 0)],
+            [(0, 1), (0, 1)],
+            [(1, 0), (1, 0)],
+            [(1, 1), (1, 1)],
+            [(-1, -1), (-1, -1)],
+        ]
+    )[best]  # (k, 2, 2): the (row, col) of up to two chosen pairs
+    chosen = np.zeros(t.shape[0], dtype=bool)
+    valid = picks[:, :, 0] >= 0
+    rows = np.repeat(np.arange(k), 2).reshape(k, 2)
+    p = pos[rows[valid], picks[:, :, 0][valid], picks[:, :, 1][valid]]
+    chosen[p[p >= 0]] = True
+    return chosen
+
+
 def _components(ti: IntArray, dj: IntArray, n_tracks: int, n_dets: int) -> IntArray:
     """Connected-component label of every node (tracks, then detections) of the gate graph.
 
@@ -307,12 +361,6 @@ def _optimal(
         chosen = _solve_dense(ti, dj, cost, u / 2)  # small frame: one dense solve, no clusters
         return ti[chosen], dj[chosen], cost[chosen]
     chosen, rest = _peel_leaves(ti, dj, cost, n_tracks, n_dets)
-    if rest.size and solver != "sparse":
-        t, d = ti[rest], dj[rest]
-        if np.unique(t).size + np.unique(d).size <= DENSE_FRAME_NODES:
-            # few pairs left: one dense solve of their union (clusters are independent)
-            chosen[rest[_solve_dense(t, d, cost[rest], u / 2)]] = True
-            return ti[chosen], dj[chosen], cost[chosen]
     if rest.size:
         t, d, c = ti[rest], dj[rest], cost[rest]
         labels = _components(t, d, n_tracks, n_dets)
@@ -333,13 +381,25 @@ def _optimal(
         # conflicting clusters (at least two tracks and two detections)
         hard = np.flatnonzero(~trivial[lab])
         if hard.size:
-            hard_c = ~trivial & (nt > 0)
+            hard_c = np.zeros(ncomp, dtype=bool)
+            hard_c[lab[hard]] = True
+            two = hard_c & (nt == 2) & (nd == 2)
+            other = hard_c & ~two
             n_hard = int(np.count_nonzero(hard_c))
             largest = int((nt + nd)[hard_c].max())
-            use_sparse = solver == "sparse" or (
+            if solver == "auto" and int((nt + nd)[other].sum()) <= DENSE_FRAME_NODES:
+                # the commonest conflict, 2 tracks × 2 detections, in closed form all at once,
+                # and one dense solve of the union of the few other clusters
+                sq = two[lab[hard]]
+                if sq.any():
+                    h = hard[sq]
+                    chosen[rest[h[_solve_2x2(t[h], d[h], c[h], lab[h], u)]]] = True
+                h = hard[~sq]
+                if h.size:
+                    chosen[rest[h[_solve_dense(t[h], d[h], c[h], u / 2)]]] = True
+            elif solver == "sparse" or (
                 solver == "auto" and (n_hard > SPARSE_CLUSTERS or largest > SMALL_NODES)
-            )
-            if use_sparse:
+            ):
                 sel = _solve_sparse(t[hard], d[hard], c[hard], u / 2)
                 chosen[rest[hard[sel]]] = True
             else:

@@ -27,7 +27,7 @@ from mvtrack.association.distances import (
 )
 from mvtrack.types import Detections
 
-#: below this many track × detection pairs the dense path is used (tree overhead dominates)
+#: up to this many track × detection pairs every pair is evaluated (the grid costs more)
 DENSE_PAIRS = 4096
 
 
