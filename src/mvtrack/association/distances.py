@@ -8,20 +8,20 @@ is ``<= gate``.
 
 Names (``DISTANCES``):
 
-============== ====================================================== ==================
-name           definition                                             default gate
-============== ====================================================== ==================
-euclidean      eq. (8) of paper 2 (paper 1's circular mask)           400 (20 px)
-uncoupled      eq. (9) of paper 2, per axis, weighted by P̄x, P̄y       9.21 (χ², 2 dof)
-coupled        SPEC §2.3: innovation rotated along the velocity       9.21
-coupled-literal eq. (10) of paper 2 exactly as printed (E2.3–E2.9)    9.21
-mahalanobis    full innovation covariance S                           9.21
-iou            1 − IoU of the boxes                                   0.7
-============== ====================================================== ==================
+=============== ===================================================== ==================
+name            definition                                            default gate
+=============== ===================================================== ==================
+euclidean       eq. (8) of paper 2 (paper 1's circular mask)          400 (20 px)
+uncoupled       eq. (9) of paper 2, per axis, weighted by P̄x, P̄y      9.21 (χ², 2 dof)
+coupled         SPEC §2.3: innovation rotated along the velocity      9.21
+coupled-literal eq. (10) of paper 2 exactly as printed (E2.3–E2.9)   9.21
+mahalanobis     full innovation covariance S                          9.21
+iou             1 − IoU of the boxes                                  0.7
+=============== ===================================================== ==================
 
 Each entry also gives a per-track *radius bound*: the largest centre distance in pixels at which
-the gate can still pass, so gating can pre-filter pairs spatially (KD-tree) before computing the
-exact values.
+the gate can still pass, so gating can pre-filter pairs spatially (grid hash) before computing
+the exact values.
 """
 
 from __future__ import annotations
