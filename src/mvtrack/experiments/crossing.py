@@ -143,14 +143,9 @@ def simulate(
 
 
 def _wilson(k: int, n: int) -> list[float]:
-    """95 % Wilson score interval of a binomial proportion."""
-    if n == 0:
-        return [0.0, 1.0]
-    zq = 1.959964
-    p = k / n
-    centre = (p + zq**2 / (2 * n)) / (1 + zq**2 / n)
-    half = zq * np.sqrt(p * (1 - p) / n + zq**2 / (4 * n * n)) / (1 + zq**2 / n)
-    return [float(max(0.0, centre - half)), float(min(1.0, centre + half))]
+    """95 % Wilson score interval of a binomial proportion ``k / n``."""
+    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson")
+    return [float(ci.low), float(ci.high)]
 
 
 def _swaps(taken: IntArray) -> NDArray[np.bool_]:
