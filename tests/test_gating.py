@@ -113,3 +113,24 @@ def test_grid_equals_dense_on_random_scenes(
     ref = candidate_pairs(view, dets, name, method="dense")
     for a, b in zip(got, ref, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["nearest", "greedy", "optimal"]))
+def test_gate_and_assign_invariant_under_shuffled_detections(seed: int, rule: str) -> None:
+    """Shuffling the detection rows of a crowded frame changes nothing but the row numbers."""
+    from mvtrack.association import assign
+
+    rng = np.random.default_rng(seed)
+    n, m = 150, 160
+    xy = rng.uniform(0, 300, (n, 2))
+    view = TrackView.from_arrays(xy, cov=4.0, velocity=rng.normal(0, 2, (n, 2)))
+    z = np.vstack([xy[:140] + rng.normal(0, 3, (140, 2)), rng.uniform(0, 300, (m - 140, 2))])
+    perm = rng.permutation(m)
+    results = []
+    for order in (np.arange(m), perm):
+        ti, dj, c = candidate_pairs(view, z[order], "coupled", method="grid")
+        a = assign(ti, dj, c, n, m, rule)  # type: ignore[arg-type]
+        results.append((a.track, order[a.det], np.sort(order[a.unmatched_dets])))
+    for x, y in zip(*results, strict=True):
+        np.testing.assert_array_equal(x, y)
