@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from pathlib import Path
 
 import cv2
@@ -56,8 +57,12 @@ def scheduler() -> str:
     """The address of a two-worker local Dask cluster shared by the tests of this module."""
     from distributed import LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=40) as cluster:
+    from mvtrack.batch import _environ_kept
+
+    with _environ_kept():  # the nanny would leave OMP_NUM_THREADS=1 etc. in this process
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=40)
+    with cluster:
         yield cluster.scheduler_address
 
 
@@ -74,7 +79,9 @@ def test_output_names_unique_in_input_order() -> None:
 
 def test_parallel_local_cluster_gives_sequential_results(videos, tmp_path) -> None:
     order = [videos["cam_a"], videos["boxes"], videos["cam_b"]]
+    environ = dict(os.environ)
     items = track_many(order, tmp_path / "batch", NO_VIDEO, workers=2, progress=False)
+    assert dict(os.environ) == environ  # the workers' settings do not leak into the caller
 
     assert [it.status for it in items] == ["ok", "ok", "ok"], items
     assert [Path(it.out).name for it in items] == ["cam", "boxes", "cam-2"]
@@ -150,7 +157,6 @@ def test_interrupt_cancels_pending_and_writes_batch_json(videos, tmp_path, sched
 def test_ctrl_c_in_a_terminal_stops_workers_and_exits_130(videos, tmp_path) -> None:
     """SIGINT to the whole process group, as a terminal sends it: only the client handles it
     (no worker tracebacks), the local workers stop, batch.json says what finished."""
-    import os
     import signal
     import subprocess
     import sys

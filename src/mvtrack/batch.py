@@ -456,6 +456,23 @@ def track_many(
 
 
 @contextlib.contextmanager
+def _environ_kept() -> Iterator[None]:
+    """Undo changes to ``os.environ`` made in the block.
+
+    Dask's nanny sets its workers' variables (``OMP_NUM_THREADS=1``, ``PYTHONHASHSEED``, ...)
+    in the environment of the process that starts them; they should not outlive the batch in
+    the caller's process.
+    """
+    saved = dict(os.environ)
+    try:
+        yield
+    finally:
+        for key in set(os.environ) - set(saved):
+            os.environ.pop(key, None)
+        os.environ.update(saved)
+
+
+@contextlib.contextmanager
 def _sigint_ignored() -> Iterator[None]:
     """Ignore SIGINT for the block (in the main thread; elsewhere do nothing).
 
@@ -486,7 +503,7 @@ def _connect(stack: contextlib.ExitStack, scheduler: str | None, n_workers: int,
         # (benchmarks/bench_batch.py). A video's memory is freed when its task ends anyway.
         import dask
 
-        with _sigint_ignored(), dask.config.set(
+        with _sigint_ignored(), _environ_kept(), dask.config.set(
             {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
         ):
             cluster = stack.enter_context(LocalCluster(
