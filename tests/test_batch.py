@@ -20,6 +20,9 @@ from mvtrack.sim.render import write_video
 from mvtrack.sim.scenes import x4_nine_vehicles, x7_crossing
 
 NO_VIDEO = dataclasses.replace(RunSettings(), video=False)
+#: a loopback cluster without dashboard whose HTTP server takes a free port
+_QUIET_CLUSTER = {"processes": True, "host": "127.0.0.1", "dashboard_address": None,
+                  "silence_logs": 40, "scheduler_kwargs": {"dashboard_address": "127.0.0.1:0"}}
 
 
 def _write_boxes(path: Path, n: int = 30, speed: int = 2) -> Path:
@@ -60,8 +63,7 @@ def scheduler() -> str:
     from mvtrack.batch import _environ_kept
 
     with _environ_kept():  # the nanny would leave OMP_NUM_THREADS=1 etc. in this process
-        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=40)
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, **_QUIET_CLUSTER)
     with cluster:
         yield cluster.scheduler_address
 
@@ -281,4 +283,17 @@ def test_unreachable_scheduler_is_one_line_oserror_and_writes_nothing(tmp_path) 
     with pytest.raises(OSError, match=r"cannot connect to Dask scheduler tcp://127\.0\.0\.1:9"):
         track_many([video], tmp_path / "out", NO_VIDEO, scheduler="tcp://127.0.0.1:9",
                    timeout=1.0)
+    assert not (tmp_path / "out").exists()
+
+
+def test_scheduler_without_workers_is_an_error_not_a_hang(tmp_path) -> None:
+    from distributed import LocalCluster
+
+    from mvtrack.batch import _environ_kept
+
+    video = _write_boxes(tmp_path / "v.avi", n=8)
+    with _environ_kept(), LocalCluster(n_workers=0, **_QUIET_CLUSTER) as empty:
+        with pytest.raises(OSError, match="has no workers"):
+            track_many([video], tmp_path / "out", NO_VIDEO, scheduler=empty.scheduler_address,
+                       timeout=1.0)
     assert not (tmp_path / "out").exists()

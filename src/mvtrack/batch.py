@@ -354,7 +354,8 @@ def track_many(
     on_result : callable, optional
         Called in this process with each finished :class:`BatchItem`, in completion order.
     timeout : float
-        Seconds to wait for the connection to ``scheduler``.
+        Seconds to wait for the connection to ``scheduler`` and, if it has none, for a
+        worker to join it.
 
     Returns
     -------
@@ -368,7 +369,7 @@ def track_many(
         No videos, ``workers`` < 1, ``workers`` together with ``scheduler``, or bad settings
         (checked before any worker starts).
     OSError
-        The scheduler cannot be reached, or ``out_root`` cannot be created.
+        The scheduler cannot be reached or has no workers, or ``out_root`` cannot be created.
     """
     settings = RunSettings() if settings is None else settings
     videos = list(videos)
@@ -500,7 +501,7 @@ def _connect(stack: contextlib.ExitStack, scheduler: str | None, n_workers: int,
         # Dask sets MALLOC_TRIM_THRESHOLD_=65536 in its workers to hand memory back to the OS
         # sooner; it also turns off glibc's adaptive mmap threshold, so every frame-sized
         # array is mmap'ed, zeroed and unmapped again: 10-15 % more CPU per video here
-        # (benchmarks/bench_batch.py). A video's memory is freed when its task ends anyway.
+        # (docs/bench/batch.md). A video's memory is freed when its task ends anyway.
         import dask
 
         with _sigint_ignored(), _environ_kept(), dask.config.set(
@@ -519,4 +520,12 @@ def _connect(stack: contextlib.ExitStack, scheduler: str | None, n_workers: int,
         raise OSError(f"cannot connect to Dask scheduler {scheduler}: {_one_line(exc)}") from None
     except ValueError as exc:
         raise ValueError(f"bad scheduler address {scheduler!r}: {_one_line(exc)}") from None
-    return stack.enter_context(client)
+    stack.enter_context(client)
+    try:  # a cluster without workers would leave the batch waiting for ever
+        client.wait_for_workers(1, timeout=timeout)
+    except TimeoutError:
+        raise OSError(
+            f"Dask scheduler {scheduler} has no workers (none joined within {timeout:g} s; "
+            f"start some with `dask worker {scheduler}`)"
+        ) from None
+    return client
