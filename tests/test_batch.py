@@ -87,6 +87,8 @@ def test_parallel_local_cluster_gives_sequential_results(videos, tmp_path) -> No
 
     assert [it.status for it in items] == ["ok", "ok", "ok"], items
     assert [Path(it.out).name for it in items] == ["cam", "boxes", "cam-2"]
+    data = json.loads((tmp_path / "batch" / "batch.json").read_text())
+    assert (data["workers"], data["scheduler"], data["ok"]) == (2, None, 3)
     for i, (video, item) in enumerate(zip(order, items, strict=True)):
         expected = _sequential(video, tmp_path / f"seq{i}")
         assert (Path(item.out) / "results.txt").read_bytes() == expected, video
@@ -116,6 +118,7 @@ def test_missing_video_is_reported_and_others_complete(videos, tmp_path, schedul
     data = json.loads((tmp_path / "out" / "batch.json").read_text())
     assert (data["total"], data["ok"], data["failed"], data["cancelled"]) == (4, 2, 2, 0)
     assert data["interrupted"] is False and data["scheduler"] == scheduler
+    assert data["workers"] == 2  # the shared cluster's
     assert [v["status"] for v in data["videos"]] == ["ok", "failed", "failed", "ok"]
     assert data["videos"][1]["error"] == items[1].error
     good = data["videos"][3]

@@ -400,7 +400,7 @@ def track_many(
 
     def save() -> None:
         write_json(summary_path, _summary(
-            items, workers=n_workers if scheduler is None else None, scheduler=scheduler,
+            items, workers=n_workers, scheduler=scheduler,
             seconds=time.perf_counter() - t0, settings=settings, interrupted=interrupted,
         ))
 
@@ -413,6 +413,9 @@ def track_many(
         with _quiet_logs(), contextlib.ExitStack() as stack:
             client = _connect(stack, scheduler, n_workers, timeout)
             from distributed import as_completed
+
+            if scheduler is not None:
+                n_workers = len(client.nthreads())  # the cluster's workers at the start
 
             root.mkdir(parents=True, exist_ok=True)
             begun = True
