@@ -387,7 +387,7 @@ def track_many(
 
     root = Path(out_root).expanduser().absolute()
     if root.exists() and not root.is_dir():
-        raise ValueError(f"--out {root} is a file, not a folder")
+        raise ValueError(f"out_root {root} is a file, not a folder")
     sources = [normalise_video(v) for v in videos]
     outs = [str(root / name) for name in output_names(sources)]
     items = [BatchItem(v, o, "pending") for v, o in zip(sources, outs, strict=True)]
