@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mvtrack.cli import main
-from mvtrack.cli.track import parse_gate
+from mvtrack.cli._options import parse_gate
 from mvtrack.config import RunSettings, load_config
 from mvtrack.errors import InputError
 from mvtrack.types import TrackState

@@ -83,3 +83,17 @@ def test_results_name() -> None:
 
     assert results_name(Path("MOT17-02/det/det.txt")) == "MOT17-02.txt"
     assert results_name(Path("x/cam1.txt")) == "cam1.txt"
+
+
+def test_gate_takes_a_radius_in_pixels_like_track(tmp_path) -> None:
+    det = tmp_path / "d.txt"
+    _det_file(det)
+    base = ["track-detections", str(det), "--preset", "paper1"]
+    # a 1 px circle loses target a (3.2 px per frame); 20px is the same gate as 400 px²
+    for out, gate in (("tiny", "1px"), ("r", "20px"), ("sq", "400")):
+        assert main([*base, "--out", str(tmp_path / out), "--gate", gate]) == 0
+    tiny, r, sq = (read_tracks(tmp_path / o / "d.txt") for o in ("tiny", "r", "sq"))
+    assert len(np.unique(tiny.id)) > len(np.unique(r.id)) == 2
+    np.testing.assert_array_equal(r.id, sq.id)
+    np.testing.assert_allclose(r.tlwh, sq.tlwh)
+    assert main([*base, "--out", str(tmp_path / "x"), "--gate", "-3px"]) == 2

@@ -187,22 +187,15 @@ def track_video(
     """
     import cv2
 
-    from mvtrack.io.video import open_source
-    from mvtrack.pipeline import build_detector, build_tracker, resolve_settings, track_to_folder
+    from mvtrack import pipeline
 
     cv2.setNumThreads(1)
     t0 = time.perf_counter()
     item = BatchItem(video=video, out=out, status="failed")
     try:
-        src = open_source(video, fps=fps)
-        with src:
-            resolved = resolve_settings(settings, src.size)
-            parts = (build_detector(resolved), build_tracker(resolved, src.fps))
-            run = track_to_folder(
-                (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
-                out=out, max_frames=max_frames, total=src.frame_count, source=video,
-                progress=False, parts=parts, source_error=lambda: src.error,
-            )
+        run = pipeline.track_video(
+            video, out, settings, fps=fps, max_frames=max_frames, progress=False
+        )
     except KeyboardInterrupt:
         item.status, item.error = "cancelled", "interrupted before any frame was tracked"
     except Exception as exc:  # one video's failure must not end the batch

@@ -728,3 +728,51 @@ def _config_dict(config: Any) -> dict[str, Any]:
         value = getattr(config, f.name)
         out[f.name] = dict(value) if isinstance(value, Mapping) else value
     return out
+
+
+def track_video(
+    video: str | int,
+    out: str | os.PathLike[str],
+    settings: RunSettings,
+    *,
+    fps: float | None = None,
+    max_frames: int | None = None,
+    progress: bool | None = None,
+    snapshot: int | None = None,
+) -> RunOutput:
+    """Open ``video``, build its parts for its size and frame rate, and :func:`track_to_folder`.
+
+    What ``mvtrack track`` and each job of ``mvtrack batch`` run. Everything that can be wrong
+    with the source or the settings fails before any file is written.
+
+    Parameters
+    ----------
+    video : str or int
+        Video file, image folder, camera index or stream URL (see
+        :func:`mvtrack.io.video.open_source`).
+    out : path
+        Output folder.
+    settings : RunSettings
+        Settings as the user gave them; the size-dependent defaults are filled in here
+        (:func:`resolve_settings`).
+    fps : float, optional
+        Frame rate to assume instead of the source's.
+    max_frames, progress, snapshot
+        As in :func:`track_to_folder`.
+
+    Raises
+    ------
+    InputError
+        Missing, unreadable or empty source; bad settings.
+    """
+    from mvtrack.io.video import open_source
+
+    src = open_source(video, fps=fps)
+    with src:
+        resolved = resolve_settings(settings, src.size)
+        parts = (build_detector(resolved), build_tracker(resolved, src.fps))
+        return track_to_folder(
+            (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
+            out=out, max_frames=max_frames, total=src.frame_count, source=str(video),
+            progress=progress, parts=parts, source_error=lambda: src.error, snapshot=snapshot,
+        )

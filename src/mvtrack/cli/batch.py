@@ -9,7 +9,18 @@ from typing import Annotated
 
 import typer
 
-from mvtrack.cli.track import _GATE_HELP, parse_gate
+from mvtrack.cli._options import (
+    Assign,
+    ConfigFile,
+    DetectorName,
+    Distance,
+    Gate,
+    NoTemplates,
+    NoVideo,
+    Predictor,
+    Preset,
+    video_settings,
+)
 
 #: file extensions taken as videos when a folder is given (case-insensitive)
 VIDEO_EXTENSIONS = (
@@ -100,31 +111,15 @@ def register(app: typer.Typer) -> None:
                 "the videos and --out at the same paths; default: a local cluster."
             ),
         ] = None,
-        preset: Annotated[
-            str | None, typer.Option(help="Tracker preset: default, paper1, paper2.")
-        ] = None,
-        predictor: Annotated[
-            str | None, typer.Option(help="kalman-ca, kalman-cv, kalman-coupled, rls, ...")
-        ] = None,
-        gate: Annotated[str | None, typer.Option(help=_GATE_HELP)] = None,
-        distance: Annotated[
-            str | None,
-            typer.Option(help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis, iou"),
-        ] = None,
-        assign: Annotated[str | None, typer.Option(help="nearest, greedy, optimal")] = None,
-        detector: Annotated[
-            str | None, typer.Option(help="disturbance-map (default), frame-diff, mog2")
-        ] = None,
-        config: Annotated[
-            Path | None, typer.Option(help="TOML settings file (see mvtrack.config).")
-        ] = None,
-        no_video: Annotated[
-            bool, typer.Option("--no-video", help="Skip the annotated MP4s (faster).")
-        ] = False,
-        no_templates: Annotated[
-            bool,
-            typer.Option("--no-templates", help="No template matching for stopped vehicles."),
-        ] = False,
+        preset: Preset = None,
+        predictor: Predictor = None,
+        gate: Gate = None,
+        distance: Distance = None,
+        assign: Assign = None,
+        detector: DetectorName = None,
+        config: ConfigFile = None,
+        no_video: NoVideo = False,
+        no_templates: NoTemplates = False,
         max_frames: Annotated[
             int | None, typer.Option(help="Track at most this many frames of each video.")
         ] = None,
@@ -139,11 +134,7 @@ def register(app: typer.Typer) -> None:
         Exit status 0 when every video succeeded, 1 when some failed (one line each on
         stderr), 2 for bad usage, 130 after Ctrl-C (pending videos are cancelled).
         """
-        import dataclasses
-
         from mvtrack.batch import track_many
-        from mvtrack.config import DETECTORS, RunSettings, load_config
-        from mvtrack.errors import InputError
 
         if workers is not None and workers < 1:
             raise ValueError(f"--workers must be at least 1, got {workers}")
@@ -158,23 +149,10 @@ def register(app: typer.Typer) -> None:
         sources = expand_videos(videos)
 
         # the same settings as `mvtrack track` builds from the same options
-        settings = load_config(config) if config is not None else RunSettings()
-        settings = settings.with_overrides(
-            preset=preset, predictor=predictor, gate=parse_gate(gate), distance=distance,
-            assign=assign,
+        settings = video_settings(
+            config=config, preset=preset, predictor=predictor, gate=gate, distance=distance,
+            assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
         )
-        if detector is not None:
-            if detector not in DETECTORS:
-                raise InputError(
-                    f"--detector {detector!r} is not a detector (choose one of: "
-                    f"{', '.join(DETECTORS)})"
-                )
-            params = settings.detector_params if detector == settings.detector else {}
-            settings = dataclasses.replace(settings, detector=detector, detector_params=params)
-        if no_video:
-            settings = dataclasses.replace(settings, video=False)
-        if no_templates:
-            settings = dataclasses.replace(settings, templates=False)
 
         items = track_many(
             sources, out, settings, workers=workers, scheduler=scheduler, fps=fps,

@@ -9,6 +9,8 @@ from typing import Annotated
 
 import typer
 
+from mvtrack.cli._options import Assign, Distance, Gate, Predictor, parse_gate
+
 
 def results_name(detfile: Path) -> str:
     """Name of the results file for ``detfile``: ``<sequence>.txt``.
@@ -31,32 +33,10 @@ def register(app: typer.Typer) -> None:
         preset: Annotated[
             str, typer.Option(help="Starting configuration: default, paper1 or paper2.")
         ] = "default",
-        predictor: Annotated[
-            str | None,
-            typer.Option(
-                help="kalman-ca, kalman-cv, kalman-coupled, rls or structured "
-                "(default: the preset's)."
-            ),
-        ] = None,
-        distance: Annotated[
-            str | None,
-            typer.Option(
-                help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis or iou "
-                "(default: the preset's)."
-            ),
-        ] = None,
-        assign: Annotated[
-            str | None, typer.Option(help="nearest, greedy or optimal (default: preset's).")
-        ] = None,
-        gate: Annotated[
-            float | None,
-            typer.Option(
-                help="Gate on the distance value: px² for euclidean (400 = 20 px), χ² for "
-                "mahalanobis/uncoupled/coupled (9.21 = 99 %), 1 − IoU for iou. "
-                "Default: the preset's (default preset: 100 = 10 px, followed by a 20 px "
-                "second stage), or the distance's own when --distance is given."
-            ),
-        ] = None,
+        predictor: Predictor = None,
+        distance: Distance = None,
+        assign: Assign = None,
+        gate: Gate = None,
         fps: Annotated[
             float, typer.Option(help="Frame rate of the sequence (time-based settings).")
         ] = 30.0,
@@ -82,7 +62,7 @@ def register(app: typer.Typer) -> None:
             if v is not None
         }
         if gate is not None:
-            changes["gate"] = gate
+            changes["gate"] = parse_gate(gate)
         elif distance is not None:
             changes["gate"] = None  # the chosen distance's default, not the preset's
         config = make_preset(preset, fps=fps, **changes)

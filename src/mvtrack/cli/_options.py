@@ -1,0 +1,108 @@
+"""Options shared by the commands that run the video pipeline (``track``, ``batch``) and the
+tracker (``track-detections``), and how they become settings.
+
+Each alias below is one option, so the commands spell, document and check it the same way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+if TYPE_CHECKING:
+    from mvtrack.config import RunSettings
+
+GATE_HELP = (
+    "Gate on the squared distance: px² for euclidean (400 = a 20 px circle; '20px' is accepted "
+    "too), a χ² value for uncoupled/coupled/mahalanobis (9.21 = 99 %), 1 − IoU for iou. "
+    "Default: the preset's, else the distance's."
+)
+
+Preset = Annotated[str | None, typer.Option(help="Tracker preset: default, paper1, paper2.")]
+Predictor = Annotated[
+    str | None,
+    typer.Option(help="kalman-ca, kalman-cv, kalman-coupled, rls or structured."),
+]
+Distance = Annotated[
+    str | None,
+    typer.Option(help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis or iou."),
+]
+Assign = Annotated[str | None, typer.Option(help="nearest, greedy or optimal.")]
+Gate = Annotated[str | None, typer.Option(help=GATE_HELP)]
+DetectorName = Annotated[
+    str | None, typer.Option(help="disturbance-map (default), frame-diff, mog2")
+]
+ConfigFile = Annotated[
+    Path | None, typer.Option(help="TOML settings file (see mvtrack.config).")
+]
+NoVideo = Annotated[bool, typer.Option("--no-video", help="Skip the annotated MP4 (faster).")]
+NoTemplates = Annotated[
+    bool, typer.Option("--no-templates", help="No template matching for stopped vehicles.")
+]
+
+
+def parse_gate(text: str | None) -> float | None:
+    """``"400"`` → 400.0; ``"20px"`` (a radius in pixels) → 400.0; None stays None."""
+    if text is None:
+        return None
+    raw = text.strip().lower()
+    try:
+        if raw.endswith("px"):
+            radius = float(raw[:-2])
+            value = radius * radius
+            ok = radius > 0
+        else:
+            value = float(raw)
+            ok = value > 0
+    except ValueError:
+        raise ValueError(f"--gate must be a number or a radius like '20px', got {text!r}") from None
+    if not ok or value != value or value == float("inf"):
+        raise ValueError(f"--gate must be positive and finite, got {text!r}")
+    return value
+
+
+def video_settings(
+    *,
+    config: Path | None,
+    preset: str | None,
+    predictor: str | None,
+    gate: str | None,
+    distance: str | None,
+    assign: str | None,
+    detector: str | None,
+    no_video: bool,
+    no_templates: bool,
+) -> RunSettings:
+    """The :class:`~mvtrack.config.RunSettings` the command-line options ask for.
+
+    The TOML file (if any) first, then each option that was given on top of it.
+
+    Raises
+    ------
+    InputError
+        A bad settings file, an unknown detector or a bad gate (one line).
+    """
+    from mvtrack.config import DETECTORS, RunSettings, load_config
+    from mvtrack.errors import InputError
+
+    settings = load_config(config) if config is not None else RunSettings()
+    settings = settings.with_overrides(
+        preset=preset, predictor=predictor, gate=parse_gate(gate), distance=distance,
+        assign=assign,
+    )
+    if detector is not None:
+        if detector not in DETECTORS:
+            raise InputError(
+                f"--detector {detector!r} is not a detector (choose one of: "
+                f"{', '.join(DETECTORS)})"
+            )
+        params = settings.detector_params if detector == settings.detector else {}
+        settings = dataclasses.replace(settings, detector=detector, detector_params=params)
+    if no_video:
+        settings = dataclasses.replace(settings, video=False)
+    if no_templates:
+        settings = dataclasses.replace(settings, templates=False)
+    return settings
