@@ -31,3 +31,10 @@ def test_unknown_option_is_one_line_error() -> None:
     proc = _run("experiment", "predictors", "--bogus")
     assert proc.returncode == 2
     assert proc.stderr.strip().count("\n") == 0 and "--bogus" in proc.stderr
+
+
+def test_version_prints_the_package_version() -> None:
+    import mvtrack
+
+    proc = _run("--version")
+    assert proc.returncode == 0 and proc.stdout.strip() == f"mvtrack {mvtrack.__version__}"

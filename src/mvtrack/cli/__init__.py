@@ -8,6 +8,7 @@ line ``error: ...`` on stderr and exit status 2; Ctrl-C ends with status 130.
 from __future__ import annotations
 
 import sys
+from typing import Annotated
 
 import typer
 
@@ -23,9 +24,23 @@ app = typer.Typer(
 )
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        from mvtrack import __version__
+
+        typer.echo(f"mvtrack {__version__}")
+        raise typer.Exit()
+
 
 @app.callback()
-def _root() -> None:
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_print_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
     """Track many moving objects in fixed-camera video, and compare predictors honestly."""
 
 
