@@ -61,6 +61,8 @@ def register(app: typer.Typer) -> None:
 
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
+        if fps is not None and not fps > 0:
+            raise ValueError(f"--fps must be positive, got {fps}")
         if snapshot is not None and snapshot < 0:
             raise ValueError(f"--snapshot must be a frame index >= 0, got {snapshot}")
         settings = video_settings(
