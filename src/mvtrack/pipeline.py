@@ -227,7 +227,8 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
 
     - the default preset's pixel distances (its Euclidean gate, ``second_gate``,
       ``recover_margin``) scaled by ``s`` (the gate, in px², by ``s²``). ``recover_speed``
-      stays: scaled, it let tracks hop 70 px per frame on 768×576 video at 10 fps.
+      stays: scaled, it let tracks hop 70 px per frame on 768×576 video at 10 fps. Its
+      ``size_ref`` is scaled by ``s`` too (boxes larger than that stretch the gates).
 
     The tracker values are only scaled up: images smaller than 320×240 keep them.
 
@@ -252,7 +253,9 @@ def _scaled_pixel_fields(tracker: dict[str, Any], s2: float) -> dict[str, Any]:
     from mvtrack.tracking import TrackerConfig
 
     defaults = {f.name: f.default for f in dataclasses.fields(TrackerConfig)}
-    power = {"second_gate": 0.5, "recover_margin": 0.5}
+    # size_ref (the box size above which the gates stretch with the box) scales too, so a
+    # blob s times the reference box is treated as the reference box at 320×240
+    power = {"second_gate": 0.5, "recover_margin": 0.5, "size_ref": 0.5}
     if tracker.get("distance", defaults.get("distance")) == "euclidean":
         power["gate"] = 1.0  # px², scales with the area
     out = {}
