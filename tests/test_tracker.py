@@ -78,7 +78,9 @@ def test_gap_is_bridged_by_coasting_with_the_same_id() -> None:
     a = _line([50.0, 50.0], [3.0, 1.0], n)
     a[20:26] = np.nan  # six missed frames (0.2 s at 30 fps; max_coast is 1 s)
     frames = _frames({0: a}, n)
-    log = track_detections(frames, TrackerConfig(confirm_hits=3, max_coast=1.0))
+    log = track_detections(
+        frames, TrackerConfig(confirm_hits=3, max_coast=1.0, coast_output=None)
+    )
     assert log.track_ids.tolist() == [1]
     for k, tf in enumerate(log):
         if k < 2:
@@ -101,7 +103,8 @@ def test_birth_and_death_at_the_right_frames() -> None:
     n = 60
     a = np.full((n, 2), np.nan)
     a[5:31] = _line([200.0, 100.0], [2.0, 2.0], 26)  # present in frames 5..30
-    config = TrackerConfig(confirm_hits=3, max_coast=0.2)  # coasts 6 frames at 30 fps
+    # coasts 6 frames at 30 fps, every coasting row output
+    config = TrackerConfig(confirm_hits=3, max_coast=0.2, coast_output=None)
     log = track_detections(_frames({0: a}, n), config)
     shown = [k for k, tf in enumerate(log) if len(tf)]
     # born at 5, confirmed on its 3rd hit (frame 7), coasts 31..36, deleted at 37
@@ -206,7 +209,7 @@ def test_physical_units_give_the_same_behaviour_at_10_and_30_fps(fps: float) -> 
     a[gone_short | gone_long] = np.nan
     config = TrackerConfig(
         fps=fps, max_coast=0.5, confirm_hits=2, init_velocity_std=120.0, accel_std=30.0,
-        distance="euclidean", gate=15.0**2,
+        distance="euclidean", gate=15.0**2, coast_output=None,
     )
     log = track_detections(_frames({0: a}, n), config)
     c = log.columns()
@@ -261,7 +264,7 @@ def test_rescue_is_not_offered_tentative_tracks_and_unfound_tracks_coast() -> No
         seen.append(uids.tolist())
         return np.zeros(len(uids), bool), np.full((len(uids), 2), np.nan)
 
-    tracker = Tracker(TrackerConfig())
+    tracker = Tracker(TrackerConfig(coast_output=None))
     out = [tracker.step(d, rescue=rescue) for d in _frames({0: a}, 10)]
     assert seen == [[0]] * 5
     assert [int(tf.state[0]) for tf in out[5:]] == [TrackState.COASTING] * 5
@@ -294,6 +297,7 @@ def test_paper1_nearest_is_non_exclusive() -> None:
         {"confirm_window": 0.0}, {"init_velocity_std": -5.0}, {"warmup_hits": 1},
         {"predictor": ""}, {"predictor_params": [1, 2]}, {"distance": "iou", "gate": 100.0},
         {"recover_speed": 0.0}, {"second_gate": -2.0}, {"recover_window": 0.0},
+        {"size_ref": 0.0}, {"coast_output": -0.1}, {"coast_output": float("inf")},
     ],
 )
 def test_bad_config_values_raise_value_error(changes: dict) -> None:
@@ -319,3 +323,54 @@ def test_track_detections_fills_skipped_frames_and_rejects_disorder() -> None:
     assert [int(tf.state[0]) for tf in log[2:]] == [1, 2, 2, 1]
     with pytest.raises(ValueError, match="frame 1"):
         track_detections([frames[2], frames[1]], TrackerConfig())
+
+
+def test_coasting_rows_are_output_only_for_coast_output_but_the_track_lives_on() -> None:
+    a = _line([100.0, 100.0], [2.0, 0.0], 20)
+    a[8:14] = np.nan  # a 6-frame gap, shorter than max_coast = 0.3 s = 9 frames at 30 fps
+    config = TrackerConfig(fps=30.0, max_coast=0.3, coast_output=2 / 30)
+    log = track_detections(_frames({0: a}, 20), config)
+    ids = [tf.track_id.tolist() for tf in log]
+    states = [tf.state.tolist() for tf in log]
+    assert ids[8:10] == [[1], [1]] and states[8:10] == [[TrackState.COASTING]] * 2
+    assert ids[10:14] == [[]] * 4  # still alive, no longer output
+    assert ids[14:] == [[1]] * 6 and states[14] == [TrackState.CONFIRMED]  # same ID after
+    every = track_detections(_frames({0: a}, 20), config.replace(coast_output=None))
+    assert [tf.track_id.tolist() for tf in every][8:14] == [[1]] * 6
+
+
+def _jump_frames(wh: np.ndarray, jump: np.ndarray) -> list[Detections]:
+    """A still target at (200, 200) for 6 frames, then one detection displaced by ``jump``."""
+    out = [Detections(k, [[200.0, 200.0]], wh[None]) for k in range(6)]
+    out.append(Detections(6, [[200.0 + jump[0], 200.0 + jump[1]]], wh[None]))
+    return out
+
+
+@pytest.mark.parametrize(
+    "wh, jump, size_ref, kept",
+    [
+        # a 120 x 40 px box stretches the 10 px gate to 30 px along x, not along y
+        ((120.0, 40.0), (25.0, 0.0), 40.0, True),
+        ((120.0, 40.0), (0.0, 25.0), 40.0, False),
+        ((40.0, 120.0), (0.0, 25.0), 40.0, True),
+        ((120.0, 40.0), (25.0, 0.0), None, False),  # no scaling: 10 px in both
+        ((30.0, 30.0), (12.0, 0.0), 40.0, False),  # boxes below size_ref: unscaled
+        ((30.0, 30.0), (8.0, 0.0), 40.0, True),
+    ],
+)
+def test_euclidean_gate_stretches_with_the_box_per_axis(wh, jump, size_ref, kept) -> None:
+    config = TrackerConfig(size_ref=size_ref, second_gate=None, recover_speed=None)
+    log = track_detections(_jump_frames(np.array(wh), np.array(jump)), config)
+    last = log[6]
+    assert (last.track_id.tolist() == [1] and last.det_index.tolist() == [0]) == kept
+
+
+def test_measurement_noise_scales_with_the_box_area_factor() -> None:
+    wh = np.array([160.0, 80.0])  # f_x = 4, f_y = 2 at size_ref 40: r = 3² · 8 px²
+    frames = _jump_frames(wh, np.array([0.0, 0.0]))
+    scaled = Tracker(TrackerConfig())
+    plain = Tracker(TrackerConfig(size_ref=None, measurement_std=3.0 * np.sqrt(8.0)))
+    for d in frames:
+        a, b = scaled.step(d), plain.step(d)
+    np.testing.assert_allclose(scaled.pstate.P, plain.pstate.P, rtol=1e-12)
+    np.testing.assert_allclose(a.filtered_xy, b.filtered_xy, rtol=1e-12)

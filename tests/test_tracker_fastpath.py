@@ -133,18 +133,60 @@ def test_optimal_is_invariant_to_permuting_detections() -> None:
     )
 
 
-def test_dense_two_stage_equals_two_sparse_stages() -> None:
+@pytest.mark.parametrize("stretch", [False, True])
+def test_dense_two_stage_equals_two_sparse_stages(stretch: bool) -> None:
     rng = np.random.default_rng(4)
     for _ in range(20):
         txy, dxy = _scene(rng, 30, 33, 120.0)
-        mt, md, ud = fa.dense_two_stage(txy, dxy, None, 25.0, 144.0)
-        t1, d1 = fa.optimal(*fa.gate_pairs(txy, dxy, None, 25.0), 30, 33, 25.0)
+        f2 = rng.uniform(1.0, 6.0, (30, 2)) if stretch else None  # per-axis box factors²
+        mt, md, ud = fa.dense_two_stage(txy, dxy, f2, 25.0, 144.0, f2)
+        t1, d1 = fa.optimal(*fa.gate_pairs(txy, dxy, f2, 25.0), 30, 33, 25.0)
         lt = np.setdiff1d(np.arange(30), t1)
         ld = np.setdiff1d(np.arange(33), d1)
-        t2, d2 = fa.optimal(*fa.gate_pairs(txy[lt], dxy[ld], None, 144.0), lt.size, ld.size,
-                            144.0)
+        t2, d2 = fa.optimal(
+            *fa.gate_pairs(txy[lt], dxy[ld], None if f2 is None else f2[lt], 144.0),
+            lt.size, ld.size, 144.0,
+        )
         want = set(zip(t1.tolist(), d1.tolist(), strict=True)) | set(
             zip(lt[t2].tolist(), ld[d2].tolist(), strict=True)
         )
         assert set(zip(mt.tolist(), md.tolist(), strict=True)) == want
         np.testing.assert_array_equal(ud, np.setdiff1d(np.arange(33), md))
+
+
+@pytest.mark.parametrize("n, m, spread", [(7, 9, 60.0), (400, 380, 800.0)])
+def test_gate_pairs_with_per_axis_factors_equal_a_hand_computed_ellipse(n, m, spread) -> None:
+    rng = np.random.default_rng(n + 7)
+    txy, dxy = _scene(rng, n, m, spread)
+    f2 = rng.uniform(1.0, 9.0, (n, 2))  # (f_x², f_y²)
+    ti, dj, cost = fa.gate_pairs(txy, dxy, f2, 100.0)
+    d = dxy[None, :, :] - txy[:, None, :]
+    want = d[..., 0] ** 2 / f2[:, 0, None] + d[..., 1] ** 2 / f2[:, 1, None]
+    wt, wd = np.nonzero(want <= 100.0)
+    assert wt.size > 0
+    got = dict(zip(zip(ti.tolist(), dj.tolist(), strict=True), cost.tolist(), strict=True))
+    assert got.keys() == set(zip(wt.tolist(), wd.tolist(), strict=True))
+    np.testing.assert_allclose([got[k] for k in zip(wt, wd, strict=True)], want[wt, wd])
+
+
+def test_fast_cv_with_per_track_r_equals_kalman_cv_with_each_r() -> None:
+    rng = np.random.default_rng(3)
+    fast = FastCVPredictor(q=0.2, r=4.0, vel_var=9.0)
+    r = np.array([4.0, 36.0, 100.0])
+    refs = [make_predictor("kalman-cv", q=0.2, r=float(v), vel_var=9.0) for v in r]
+    xy0 = rng.uniform(0, 300, (3, 2))
+    a = fast.init(xy0, r)
+    b = [p.init(xy0[i : i + 1]) for i, p in enumerate(refs)]
+    for k in range(25):
+        a = fast.predict(a)
+        b = [p.predict(s) for p, s in zip(refs, b, strict=True)]
+        z = xy0 + 3.0 * k + rng.normal(0, 3.0, xy0.shape)
+        mask = rng.random(3) > 0.2
+        a = fast.update(a, z, mask, r)
+        b = [p.update(s, z[i : i + 1], mask[i : i + 1]) for i, (p, s) in
+             enumerate(zip(refs, b, strict=True))]
+        for i, (p, s) in enumerate(zip(refs, b, strict=True)):
+            np.testing.assert_allclose(fast.position(a)[i], p.position(s)[0], rtol=1e-10)
+            np.testing.assert_allclose(fast.velocity(a)[i], p.velocity(s)[0], atol=1e-9)
+            np.testing.assert_allclose(fast.position_cov(a)[i], p.position_cov(s)[0],
+                                       rtol=1e-9)

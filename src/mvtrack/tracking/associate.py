@@ -4,8 +4,12 @@ For the distances whose gate is a disc around the prediction — ``euclidean`` (
 paper 2) and ``mahalanobis`` with an isotropic innovation covariance ``S = s I`` (what the
 per-axis filters give, SPEC E2.3) — the tracker gates and assigns here with a small, fixed
 number of array operations per frame. Everything else goes through
-:mod:`mvtrack.association` (the same values; ``tests/test_tracker_associate.py`` checks this
-module against it).
+:mod:`mvtrack.association`. :func:`gate_pairs` mirrors
+:func:`mvtrack.association.gating.candidate_pairs` with the ``euclidean`` and ``mahalanobis``
+distances, :func:`optimal` :func:`mvtrack.association.assign.assign` with rule ``optimal`` and
+``unmatched_cost = 2 half_u``; ``tests/test_tracker_fastpath.py`` pins them equal. The
+tracker's box-size scaling adds per-axis factors (an axis-aligned ellipse) that
+:mod:`mvtrack.association` does not have; that case is checked against a hand computation.
 
 Gating is dense (an ``N × M`` matrix by broadcasting) for small problems and spatial (a
 uniform grid of cells one gate radius wide, built by sorting) for large ones, so the number of
@@ -48,32 +52,45 @@ _EMPTY = np.zeros(0, dtype=np.intp)
 _NEIGHBOURS = np.array([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=np.int64)
 
 
+def _cost(dx: FloatArray, dy: FloatArray, scale: FloatArray | None) -> FloatArray:
+    """``Δᵀ S⁻¹ Δ`` for track rows along axis 0 of ``dx, dy`` (new array).
+
+    ``scale``: ``None`` (``S = I``: squared Euclidean distance, eq. (8) of paper 2), ``(N,)``
+    (``S_i = s_i I``) or ``(N, 2)`` (``S_i = diag(s_i)``, an axis-aligned ellipse).
+    """
+    if scale is None:
+        return dx * dx + dy * dy  # eq. (8) of paper 2, squared
+    extra = (slice(None),) + (None,) * (dx.ndim - 1)
+    if scale.ndim == 1:
+        return (dx * dx + dy * dy) / scale[extra]
+    return dx * dx / scale[:, 0][extra] + dy * dy / scale[:, 1][extra]
+
+
 def gate_pairs(
     txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float
 ) -> tuple[IntArray, IntArray, FloatArray]:
-    """Gated pairs ``(ti, dj, cost)`` with ``cost = |z_j − x̄_i|² / scale_i <= gate``.
+    """Gated pairs ``(ti, dj, cost)`` with ``cost = Δᵀ S_i⁻¹ Δ <= gate``, ``Δ = z_j − x̄_i``.
 
-    ``scale`` is ``None`` for the Euclidean distance (eq. (8) of paper 2, cost in px²) and the
-    innovation variance ``s_i`` (N,) for the Mahalanobis distance with ``S_i = s_i I``
-    (cost χ²-distributed with 2 degrees of freedom).
+    ``scale`` is ``None`` for the Euclidean distance (eq. (8) of paper 2, cost in px², the
+    values of :func:`mvtrack.association.distances.euclidean`), the innovation variance
+    ``s_i`` (N,) for the Mahalanobis distance with ``S_i = s_i I`` (cost χ²-distributed with
+    2 degrees of freedom, the values of ``mahalanobis`` there), or per-axis factors ``(N, 2)``
+    (``S_i = diag(s_i)``: the tracker's Euclidean gate stretched with the box size).
     """
     n, m = txy.shape[0], dxy.shape[0]
     if n == 0 or m == 0:
         return _EMPTY, _EMPTY, np.zeros(0)
     if n * m <= DENSE_PAIRS:
-        dx = dxy[:, 0] - txy[:, 0, None]
-        dy = dxy[:, 1] - txy[:, 1, None]
-        cost = dx * dx + dy * dy  # eq. (8) of paper 2, squared
-        if scale is not None:
-            cost /= scale[:, None]  # Δᵀ S⁻¹ Δ with S = s I
+        cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
         ti, dj = np.nonzero(cost <= gate)
         return ti, dj, cost[ti, dj]
-    radius = np.sqrt(gate * scale) if scale is not None else np.full(n, np.sqrt(gate))
+    if scale is None:
+        radius = np.full(n, np.sqrt(gate))
+    else:
+        radius = np.sqrt(gate * (scale if scale.ndim == 1 else scale.max(axis=1)))
     ti, dj = spatial_pairs(txy, dxy, radius)
     d = dxy[dj] - txy[ti]
-    cost = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]
-    if scale is not None:
-        cost /= scale[ti]
+    cost = _cost(d[:, 0], d[:, 1], None if scale is None else scale[ti])
     keep = cost <= gate
     return ti[keep], dj[keep], cost[keep]
 
@@ -141,11 +158,7 @@ def dense_optimal(
     unmatched, which makes the rectangular problem equivalent to the penalised one (up to a
     constant). Returns matched (track, detection) rows.
     """
-    dx = dxy[:, 0] - txy[:, 0, None]
-    dy = dxy[:, 1] - txy[:, 1, None]
-    cost = dx * dx + dy * dy  # eq. (8) of paper 2, squared
-    if scale is not None:
-        cost /= scale[:, None]  # Δᵀ S⁻¹ Δ with S = s I
+    cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
     u = 2.0 * gate
     cost[~(cost <= gate)] = u  # NaN never passes
     rows, cols = linear_sum_assignment(cost)
@@ -154,24 +167,27 @@ def dense_optimal(
 
 
 def dense_two_stage(
-    txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float, gate2: float
+    txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float, gate2: float,
+    scale2: FloatArray | None = None,
 ) -> tuple[IntArray, IntArray, IntArray]:
     """:func:`dense_optimal`, then a second stage on what is left.
 
     The tracks and detections left unmatched by the first stage are assigned again with the
-    Euclidean gate ``gate2`` (px²) on the squared distance, from the same distance matrix.
+    Euclidean gate ``gate2`` (px²) on the squared distance (with ``scale2`` (N,) or (N, 2)
+    when given, as ``scale`` of :func:`gate_pairs`: the tracker's box-size factors), from the
+    same differences.
     Returns all matched (track, detection) rows, first stage first, and the unassigned
     detection rows.
     """
-    d = dxy[None, :, :] - txy[:, None, :]
-    d2 = (d * d).sum(axis=2)  # eq. (8) of paper 2, squared
-    cost = d2 / scale[:, None] if scale is not None else d2.copy()
+    dx = dxy[:, 0] - txy[:, 0, None]
+    dy = dxy[:, 1] - txy[:, 1, None]
+    cost = _cost(dx, dy, scale)  # eq. (8) of paper 2, squared (over S)
     u = 2.0 * gate
     cost[~(cost <= gate)] = u  # NaN never passes
     rows, cols = linear_sum_assignment(cost)
     keep = cost[rows, cols] < u
     rows, cols = rows[keep], cols[keep]
-    n, m = d2.shape
+    n, m = cost.shape
     free_d = np.ones(m, dtype=bool)
     free_d[cols] = False
     if rows.size == n or rows.size == m:
@@ -179,7 +195,7 @@ def dense_two_stage(
     free_t = np.ones(n, dtype=bool)
     free_t[rows] = False
     lt, ld = np.flatnonzero(free_t), np.flatnonzero(free_d)
-    sub = d2[lt[:, None], ld]
+    sub = _cost(dx[lt[:, None], ld], dy[lt[:, None], ld], None if scale2 is None else scale2[lt])
     ok = sub <= gate2
     if not ok.any():
         return rows, cols, ld

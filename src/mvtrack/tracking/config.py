@@ -31,6 +31,7 @@ class FrameParams:
     accel_std: float | None  #: white-acceleration std, px/frame² (None = predictor default)
     recover_speed: float | None  #: recovery radius growth, px/frame (None = no recovery)
     recover_window: int  #: frames since the last measurement within which recovery is tried
+    coast_output: int | None  #: consecutive misses up to which coasting rows are output
 
 
 @dataclass(frozen=True)
@@ -114,6 +115,24 @@ class TrackerConfig:
     size_smoothing : float
         Weight in (0, 1] of a new measured box size in the exponential average of ``wh``
         (1 = use the last measured size).
+    size_ref : float or None
+        Pixels. The pixel values above that describe the *detections* — ``measurement_std``,
+        the Euclidean ``gate``, ``second_gate`` and ``recover_margin`` — hold for boxes up to
+        ``size_ref`` wide and high; a track whose (smoothed) box is larger has them stretched
+        with it, by ``f_x = max(1, w / size_ref)`` along x and ``f_y = max(1, h / size_ref)``
+        along y: the Euclidean gates become ellipses ``Δx²/f_x² + Δy²/f_y² <= gate``, the
+        measurement variance ``r f_x f_y`` and the recovery margin ``√(f_x f_y)`` times its
+        value. A detector whose error grows with the box (5 % of a 180 px tall person is
+        9 px) then meets a gate and a noise model of the same relative size, as the
+        box-height-proportional noise of DeepSORT. The motion parameters (``accel_std``,
+        ``init_velocity_std``, ``recover_speed``) are not scaled. The noise is scaled only with
+        the closed-form ``kalman-cv``, the gates only for ``euclidean`` (and ``mahalanobis``
+        through the scaled noise). ``None`` disables the scaling.
+    coast_output : float or None
+        Seconds. Rows of a coasting track are output only for its first ``coast_output``
+        seconds without a detection; it stays alive (and can be associated again) for
+        ``max_coast``. A short gap is usually a missed detection of a target still there,
+        a long one more often a target that has left; ``None`` outputs every coasting row.
     """
 
     predictor: str = "kalman-cv"
@@ -128,7 +147,7 @@ class TrackerConfig:
     confirm_window: float | None = None
     max_coast: float = 0.3
     tentative_max_coast: float = 0.0
-    measurement_std: float | None = 2.0
+    measurement_std: float | None = 3.0
     init_velocity_std: float | None = 150.0
     accel_std: float | None = 200.0
     second_gate: float | None = 20.0
@@ -140,6 +159,8 @@ class TrackerConfig:
     warmup_hits: int = 6
     output_tentative: bool = False
     size_smoothing: float = 0.5
+    size_ref: float | None = 40.0
+    coast_output: float | None = 0.08
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -161,6 +182,11 @@ class TrackerConfig:
             raise bad("confirm_hits", "must be an integer >= 1")
         if self.confirm_window is not None and not _finite_positive(self.confirm_window):
             raise bad("confirm_window", "must be a finite number of seconds > 0 or None")
+        if self.coast_output is not None and not (
+            isinstance(self.coast_output, (int, float)) and math.isfinite(self.coast_output)
+            and self.coast_output >= 0
+        ):
+            raise bad("coast_output", "must be a finite number of seconds >= 0 or None")
         for name in ("max_coast", "tentative_max_coast"):
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
@@ -173,7 +199,8 @@ class TrackerConfig:
         if not _finite_positive(self.recover_window):
             raise bad("recover_window", "must be a finite number of seconds > 0")
         for name in (
-            "measurement_std", "init_velocity_std", "accel_std", "recover_speed", "second_gate"
+            "measurement_std", "init_velocity_std", "accel_std", "recover_speed", "second_gate",
+            "size_ref",
         ):
             value = getattr(self, name)
             if value is not None and not _finite_positive(value):
@@ -208,6 +235,7 @@ class TrackerConfig:
             accel_std=None if self.accel_std is None else self.accel_std / fps**2,
             recover_speed=None if self.recover_speed is None else self.recover_speed / fps,
             recover_window=max(1, _round(self.recover_window * fps)),
+            coast_output=None if self.coast_output is None else _round(self.coast_output * fps),
         )
 
     def replace(self, **changes: Any) -> TrackerConfig:
@@ -225,8 +253,11 @@ def _round(x: float) -> int:
 
 
 #: what both paper presets share: R = 4 px² (SPEC §2.1 [R]), the predictors' own priors, no
-#: recovery stage, paper 1's warm-up gate centre until 2M = 6 associations
+#: recovery stage, no scaling with the box size, paper 1's warm-up gate centre until 2M = 6
+#: associations
 _PAPER_COMMON: dict[str, Any] = {
+    "size_ref": None,
+    "coast_output": None,
     "measurement_std": 2.0,
     "init_velocity_std": None,
     "accel_std": None,
@@ -284,13 +315,15 @@ def paper2(distance: str = "coupled", fps: float = 15.0) -> TrackerConfig:
 
 
 def default(fps: float = 30.0) -> TrackerConfig:
-    """The modern default, ``TrackerConfig(fps=fps)`` (chosen by the crowd benchmark,
-    docs/bench/tracker.md): closed-form per-axis constant-velocity KF (σ_z = 2 px,
-    σ_a = 200 px/s², velocity prior 150 px/s); association in stages, each the gated global
-    nearest neighbour (``optimal``): a 10 px Euclidean gate, then 20 px for the tracks and
-    detections left over, then the recovery stage (250 px/s from the last measurement) for
-    established targets that turned or bounced; confirmation on 2 consecutive hits and
-    0.3 s of coasting."""
+    """The modern default, ``TrackerConfig(fps=fps)`` (chosen on the crowd benchmark,
+    docs/bench/tracker.md, and on real boxes, docs/bench/tud.md): closed-form per-axis
+    constant-velocity KF (σ_z = 3 px, σ_a = 200 px/s², velocity prior 150 px/s); association
+    in stages, each the gated global nearest neighbour (``optimal``): a 10 px Euclidean gate,
+    then 20 px for the tracks and detections left over, then the recovery stage (250 px/s
+    from the last measurement) for established targets that turned or bounced. σ_z, the
+    gates and the recovery margin hold for boxes up to 40 px and stretch per axis with larger
+    boxes (``size_ref``). Confirmation on 2 consecutive hits; a track coasts up to 0.3 s but
+    its coasting rows are output only for the first 0.08 s (``coast_output``)."""
     return TrackerConfig(fps=fps)
 
 

@@ -5,8 +5,12 @@ The same filter as ``kalman-cv`` of :mod:`mvtrack.filters.predictors` (per-axis 
 both image axes use the same model, the same initial covariance and the same update mask, so
 their 2×2 covariances are identical (SPEC E2.3) and one ``(a, b, c)`` triple per track serves
 both. A frame then costs a couple of dozen array operations on ``(N,)`` columns instead of
-batched matrix products, which is what keeps the tracker's small-``N`` cost low. The test
-``tests/test_tracker_fastkf.py`` checks it against the general predictor to 1e-9.
+batched matrix products, which is what keeps the tracker's small-``N`` cost low. It mirrors
+:class:`mvtrack.filters.predictors.KalmanCVPredictor` (``make_predictor("kalman-cv")``,
+whose kernels are :func:`mvtrack.filters.fast.kf_axis_predict` and
+:func:`~mvtrack.filters.fast.kf_axis_update`);
+``tests/test_tracker_fastpath.py`` pins the two equal to 1e-9, also with a measurement
+variance per track (the tracker's box-size scaling, ``TrackerConfig.size_ref``).
 
 With ``P = [[a, b], [b, c]]`` per axis, Δt = 1 frame, ``G = [1/2, 1]ᵀ`` and ``Q = G q Gᵀ``:
 
@@ -73,13 +77,19 @@ class FastCVPredictor:
         self._FPF = np.array([[1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [1.0, 1.0, 1.0]])
         self._qvec = self.q * np.array([0.25, 0.5, 1.0])  # G q Gᵀ, G = [1/2, 1]ᵀ
 
-    def init(self, xy: FloatArray) -> CVState:
-        """``K`` new tracks at ``xy`` (K, 2) with zero velocity."""
+    def init(self, xy: FloatArray, r: FloatArray | None = None) -> CVState:
+        """``K`` new tracks at ``xy`` (K, 2) with zero velocity.
+
+        ``r`` (K,), optional: per-track measurement variances instead of ``self.r``
+        (``P₀ = diag(r_i, vel_var)``).
+        """
         k = xy.shape[0]
         x = np.zeros((k, 4))
         x[:, :2] = xy
         P = np.empty((k, 3))
         P[:] = (self.r, 0.0, self.vel_var)
+        if r is not None:
+            P[:, 0] = r
         return CVState(x, P)
 
     def predict(self, state: CVState) -> CVState:
@@ -88,12 +98,17 @@ class FastCVPredictor:
         P = state.P @ self._FPF + self._qvec  # eq. (7): F P Fᵀ + G q Gᵀ on (a, b, c)
         return CVState(x, P)
 
-    def update(self, state: CVState, z: FloatArray, mask: BoolArray) -> CVState:
-        """Measurement update, eqs. (3)–(5); rows with ``mask`` False or NaN keep the prediction."""
+    def update(
+        self, state: CVState, z: FloatArray, mask: BoolArray, r: FloatArray | None = None
+    ) -> CVState:
+        """Measurement update, eqs. (3)–(5); rows with ``mask`` False or NaN keep the prediction.
+
+        ``r`` (N,), optional: per-track measurement variances instead of ``self.r``.
+        """
         x, P = state.x, state.P
         nu = z - x[:, :2]  # innovation per axis (NaN where missing)
         ok = mask & ~np.isnan(nu[:, 0])
-        w = ok / (P[:, 0] + self.r)  # 1/S, eq. (3); 0 where there is no measurement
+        w = ok / (P[:, 0] + (self.r if r is None else r))  # 1/S, eq. (3); 0 where no measurement
         gain = P[:, :2] * w[:, None]  # K = [a, b]ᵀ / S, eq. (3)
         nu[~ok] = 0.0
         xn = (x.reshape(-1, 2, 2) + gain[:, :, None] * nu[:, None, :]).reshape(-1, 4)  # (4)

@@ -265,6 +265,10 @@ class Tracker:
         sg = self.config.second_gate
         self._gate2 = None if sg is None else float(sg) ** 2
         self._gate = self._distance.gate if self.config.gate is None else float(self.config.gate)
+        # scaling of the detection-related pixel values with the box size (config.size_ref)
+        ref = self.config.size_ref
+        self._inv_ref2 = None if ref is None else 1.0 / float(ref) ** 2
+        self._scale_r = self._inv_ref2 is not None and isinstance(self.predictor, FastCVPredictor)
         self.reset()
 
     def reset(self) -> None:
@@ -320,17 +324,19 @@ class Tracker:
             gxy = pred.position(ps)
             if fp.warmup_hits:
                 gxy = self._warmup_centre(tab, gxy, k)
+            f2 = None if self._inv_ref2 is None else self._size_scale2(tab.floats[:, WH])
+            r_rows = pred.r * self._r_factor(f2) if self._scale_r else None  # per track
             staged = False
             if m == 0:
                 mt = md = ud = _EMPTY
             elif self._fast_gate is not None:
-                mt, md, ud, staged = self._associate_fast(ps, gxy, dets)
+                mt, md, ud, staged = self._associate_fast(ps, gxy, dets, f2, r_rows)
             else:
                 mt, md, ud = self._associate(ps, gxy, tab, dets)
             det_index = np.full(n, -1, dtype=np.int64)
             det_index[mt] = md
             if self._gate2 is not None and not staged and ud.size and mt.size < n:
-                mt2, md2 = self._second_stage(gxy, det_index, dets, ud)
+                mt2, md2 = self._second_stage(gxy, det_index, dets, ud, f2)
                 if mt2.size:
                     det_index[mt2] = md2
                     mt, md = np.concatenate([mt, mt2]), np.concatenate([md, md2])
@@ -339,7 +345,7 @@ class Tracker:
                     ud = ud[~used[ud]]
             recovered = None
             if self._fp.recover_speed is not None and ud.size and mt.size < n:
-                mt2, md2 = self._recover(tab, det_index, dets, ud, k)
+                mt2, md2 = self._recover(tab, det_index, dets, ud, k, f2)
                 if mt2.size:
                     det_index[mt2] = md2
                     mt, md = np.concatenate([mt, mt2]), np.concatenate([md, md2])
@@ -357,9 +363,14 @@ class Tracker:
                 if rescued is not None:
                     held = matched | rescued
                     hi = np.flatnonzero(held)
-            ps = pred.update(ps, z, held)  # measurement update, eqs. (3)–(5) of paper 1
+            if r_rows is None:
+                ps = pred.update(ps, z, held)  # measurement update, eqs. (3)–(5) of paper 1
+            else:
+                ps = pred.update(ps, z, held, r_rows)  # the same with r f² per track
             if recovered is not None:  # restart the predictor at the re-acquired detection
-                ps = _put_state(ps, recovered, pred.init(z[recovered]))
+                new = (pred.init(z[recovered]) if r_rows is None
+                       else pred.init(z[recovered], r_rows[recovered]))
+                ps = _put_state(ps, recovered, new)
             ints, flo = tab.ints.copy(), tab.floats.copy()
             count_hits(ints, matched, hi)
             ints[hi, PREV_K] = ints[hi, LAST_K]
@@ -373,6 +384,8 @@ class Tracker:
             if confirmed_now.any():
                 self._next_id = hand_out_ids(ints, confirmed_now, self._next_id)
             show = ~delete if self.config.output_tentative else ~delete & (state != TENTATIVE)
+            if fp.coast_output is not None:  # long coasting: alive, but no longer output
+                show &= ints[:, MISSES] <= fp.coast_output
             rows = np.flatnonzero(show)
             oi = ints[rows]
             of = np.concatenate(  # one gather for all float columns of the output
@@ -425,20 +438,24 @@ class Tracker:
         return a.track, a.det, a.unmatched_dets
 
     def _associate_fast(
-        self, ps: Any, gxy: FloatArray, dets: Detections
+        self, ps: Any, gxy: FloatArray, dets: Detections, f2: FloatArray | None,
+        r_rows: FloatArray | None,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], bool]:
         """Gate and assign through :mod:`mvtrack.tracking.associate` (disc-shaped gates);
-        the flag says whether the second stage was done too."""
+        the flag says whether the second stage was done too. ``f2`` (N, 2) stretches the
+        Euclidean gates per axis (``Δx²/f_x² + Δy²/f_y² <= gate``), ``r_rows`` (N,) are the
+        tracks' measurement variances."""
         n, m = gxy.shape[0], len(dets)
-        scale = None
+        scale = f2
         if self._fast_gate == "mahalanobis":
-            scale = self.predictor.position_var(ps) + self.predictor.r  # S = (P̄ + r) I
+            r = self.predictor.r if r_rows is None else r_rows
+            scale = self.predictor.position_var(ps) + r  # S = (P̄ + r) I
         rule = self.config.assign
         staged = False
         if rule == "optimal" and not self._assign_params and n * m <= fast_assoc.DENSE_LSA:
             if self._gate2 is not None:  # both stages from one distance matrix
                 mt, md, ud = fast_assoc.dense_two_stage(
-                    gxy, dets.xy, scale, self._gate, self._gate2
+                    gxy, dets.xy, scale, self._gate, self._gate2, f2
                 )
                 return mt, md, ud, True
             else:
@@ -455,14 +472,18 @@ class Tracker:
         return mt, md, np.flatnonzero(~used), staged
 
     def _second_stage(
-        self, gxy: FloatArray, det_index: IntArray, dets: Detections, ud: NDArray[np.intp]
+        self, gxy: FloatArray, det_index: IntArray, dets: Detections, ud: NDArray[np.intp],
+        f2: FloatArray | None,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         """Second association stage: the tracks left unmatched by the first stage against the
-        detections left unassigned, with the wider Euclidean gate ``second_gate`` (px) around
-        the prediction (gated global nearest neighbour on the squared distance)."""
+        detections left unassigned, with the wider Euclidean gate ``second_gate`` (px, stretched
+        per axis by the size factors ``f_x, f_y``) around the prediction (gated global nearest
+        neighbour on the squared distance)."""
         cand = np.flatnonzero(det_index < 0)
         g = self._gate2
-        ti, dj, cost = fast_assoc.gate_pairs(gxy[cand], dets.xy[ud], None, g)
+        ti, dj, cost = fast_assoc.gate_pairs(
+            gxy[cand], dets.xy[ud], None if f2 is None else f2[cand], g
+        )
         if ti.size == 0:
             return _EMPTY, _EMPTY
         mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, g)
@@ -470,14 +491,15 @@ class Tracker:
 
     def _recover(
         self, tab: TrackTable, det_index: IntArray, dets: Detections, ud: NDArray[np.intp],
-        k: int,
+        k: int, f2: FloatArray | None = None,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         """Second association stage: lost confirmed tracks vs unassigned detections.
 
         A confirmed (or coasting, or stopped) track with at least ``recover_min_hits``
         associations, measured within the last ``recover_window``, that has no detection in
         its gate may take an unassigned detection within ``r = v_max Δk + margin`` of its last
-        measurement, Δk the frames since that measurement; pairs are chosen by the gated
+        measurement, Δk the frames since that measurement (the margin times ``√(f_x f_y)``
+        when the box size scales the gates); pairs are chosen by the gated
         global nearest neighbour on ``|z − y_last|² / r²``. Returns the recovered track rows
         and their detections.
         """
@@ -490,13 +512,26 @@ class Tracker:
         )
         if cand.size == 0:
             return _EMPTY, _EMPTY
-        radius = self._fp.recover_speed * (k - tab.last_k[cand]) + self.config.recover_margin
+        margin = self.config.recover_margin
+        if f2 is not None:
+            margin = margin * np.sqrt(self._r_factor(f2[cand]))
+        radius = self._fp.recover_speed * (k - tab.last_k[cand]) + margin
         if cand.size * ud.size <= fast_assoc.DENSE_LSA:
             mt, md = fast_assoc.dense_optimal(tab.last_xy[cand], dets.xy[ud], radius**2, 1.0)
         else:
             ti, dj, cost = fast_assoc.gate_pairs(tab.last_xy[cand], dets.xy[ud], radius**2, 1.0)
             mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
         return cand[mt], ud[md]
+
+    def _size_scale2(self, wh: FloatArray) -> FloatArray:
+        """Per-axis size factors squared, ``(f_x², f_y²) = max(1, (w, h)² / size_ref²)``, (N, 2)
+        (1 for boxes without a size)."""
+        return np.fmax(wh * wh * self._inv_ref2, 1.0)  # fmax: NaN → 1
+
+    @staticmethod
+    def _r_factor(f2: FloatArray) -> FloatArray:
+        """``f_x f_y`` (N,): the factor of the measurement variance (the box's area factor)."""
+        return np.sqrt(f2[:, 0] * f2[:, 1])
 
     def _warmup_centre(self, tab: TrackTable, pxy: FloatArray, k: int) -> FloatArray:
         """Paper 1's warm-up gate centre (SPEC §1.1 [R]).
@@ -549,8 +584,12 @@ class Tracker:
         if b > 1:
             ud = ud[birth_order(dets.xy[ud])]
         xy = dets.xy[ud]
-        new_ps = self.predictor.init(xy)
         wh = dets.wh[ud]
+        if self._scale_r:  # r f² from the detection's box
+            r_new = self.predictor.r * self._r_factor(self._size_scale2(wh))
+            new_ps = self.predictor.init(xy, r_new)
+        else:
+            new_ps = self.predictor.init(xy)
         ints = np.empty((b, N_INT), dtype=np.int64)
         ints[:] = (0, -1, TENTATIVE, 1, 0, 1, k, k)
         ints[:, UID] = np.arange(self._next_uid, self._next_uid + b)
