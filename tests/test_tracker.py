@@ -368,7 +368,7 @@ def test_euclidean_gate_stretches_with_the_box_per_axis(wh, jump, size_ref, kept
 def test_measurement_noise_scales_with_the_box_area_factor() -> None:
     wh = np.array([160.0, 80.0])  # f_x = 4, f_y = 2 at size_ref 40: r = 3² · 8 px²
     frames = _jump_frames(wh, np.array([0.0, 0.0]))
-    scaled = Tracker(TrackerConfig())
+    scaled = Tracker(TrackerConfig(size_ref=40.0))
     plain = Tracker(TrackerConfig(size_ref=None, measurement_std=3.0 * np.sqrt(8.0)))
     for d in frames:
         a, b = scaled.step(d), plain.step(d)

@@ -114,7 +114,7 @@ def spatial_pairs(
     width = int(max(dc[:, 0].max(), ((txy[:, 0] - lo[0]) // cell).max())) + 3
     dkey = (dc[:, 1] + 1) * width + dc[:, 0] + 1
     order = np.argsort(dkey, kind="stable")
-    narrow = np.flatnonzero(radius <= cell)
+    narrow = (radius <= cell).nonzero()[0]
     tc = ((txy[narrow] - lo) // cell).astype(np.int64) + 1
     keys = ((tc[:, 1, None] + _NEIGHBOURS[:, 1]) * width + tc[:, 0, None] + _NEIGHBOURS[:, 0])
     keys = keys.ravel()
@@ -134,7 +134,7 @@ def spatial_pairs(
     # positions start[r], start[r] + 1, ... for every (track, cell) run r
     run_start = np.repeat(start - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
     dj = order[run_start + np.arange(total)]
-    wide = np.flatnonzero(~(radius <= cell))
+    wide = (~(radius <= cell)).nonzero()[0]
     if wide.size:
         tree = cKDTree(dxy)
         r = np.where(np.isfinite(radius[wide]), radius[wide], np.inf)
@@ -159,8 +159,11 @@ def dense_optimal(
     constant). Returns matched (track, detection) rows.
     """
     cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
+    out = ~(cost <= gate)  # NaN never passes
+    if np.count_nonzero(out) == out.size:
+        return _EMPTY, _EMPTY
     u = 2.0 * gate
-    cost[~(cost <= gate)] = u  # NaN never passes
+    cost[out] = u
     rows, cols = linear_sum_assignment(cost)
     keep = cost[rows, cols] < u
     return rows[keep], cols[keep]
@@ -182,22 +185,30 @@ def dense_two_stage(
     dx = dxy[:, 0] - txy[:, 0, None]
     dy = dxy[:, 1] - txy[:, 1, None]
     cost = _cost(dx, dy, scale)  # eq. (8) of paper 2, squared (over S)
+    plain = scale is None and scale2 is None
+    d2 = cost.copy() if plain else None  # the second stage's costs
     u = 2.0 * gate
     cost[~(cost <= gate)] = u  # NaN never passes
     rows, cols = linear_sum_assignment(cost)
     keep = cost[rows, cols] < u
     rows, cols = rows[keep], cols[keep]
     n, m = cost.shape
-    free_d = np.ones(m, dtype=bool)
+    free_d = np.empty(m, dtype=bool)
+    free_d.fill(True)
     free_d[cols] = False
     if rows.size == n or rows.size == m:
-        return rows, cols, np.flatnonzero(free_d)
-    free_t = np.ones(n, dtype=bool)
+        return rows, cols, free_d.nonzero()[0]
+    free_t = np.empty(n, dtype=bool)
+    free_t.fill(True)
     free_t[rows] = False
-    lt, ld = np.flatnonzero(free_t), np.flatnonzero(free_d)
-    sub = _cost(dx[lt[:, None], ld], dy[lt[:, None], ld], None if scale2 is None else scale2[lt])
+    lt, ld = free_t.nonzero()[0], free_d.nonzero()[0]
+    if d2 is not None:
+        sub = d2[lt[:, None], ld]
+    else:
+        sub = _cost(dx[lt[:, None], ld], dy[lt[:, None], ld],
+                    None if scale2 is None else scale2[lt])
     ok = sub <= gate2
-    if not ok.any():
+    if not np.count_nonzero(ok):
         return rows, cols, ld
     u2 = 2.0 * gate2
     sub[~ok] = u2
@@ -205,7 +216,7 @@ def dense_two_stage(
     keep = sub[r2, c2] < u2
     r2, c2 = lt[r2[keep]], ld[c2[keep]]
     free_d[c2] = False
-    return np.concatenate([rows, r2]), np.concatenate([cols, c2]), np.flatnonzero(free_d)
+    return np.concatenate([rows, r2]), np.concatenate([cols, c2]), free_d.nonzero()[0]
 
 
 def _first_of_runs(key: IntArray) -> NDArray[np.bool_]:
@@ -238,11 +249,11 @@ def optimal(
     t_star = ~t_conf[ti]  # pairs of components with one track (or 1-1)
     d_star = ~d_conf[dj] & ~t_star  # components with one detection and several tracks
     parts = []
-    if t_star.any():
-        parts.append(_min_per(ti, cost, dj, np.flatnonzero(t_star)))
-    if d_star.any():
-        parts.append(_min_per(dj, cost, ti, np.flatnonzero(d_star)))
-    hard = np.flatnonzero(~(t_star | d_star))
+    if np.count_nonzero(t_star):
+        parts.append(_min_per(ti, cost, dj, t_star.nonzero()[0]))
+    if np.count_nonzero(d_star):
+        parts.append(_min_per(dj, cost, ti, d_star.nonzero()[0]))
+    hard = (~(t_star | d_star)).nonzero()[0]
     if hard.size:
         parts.append(hard[_solve_conflicts(ti[hard], dj[hard], cost[hard], half_u)])
     chosen = np.concatenate(parts) if len(parts) > 1 else parts[0]

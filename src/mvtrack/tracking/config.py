@@ -159,7 +159,7 @@ class TrackerConfig:
     warmup_hits: int = 6
     output_tentative: bool = False
     size_smoothing: float = 0.5
-    size_ref: float | None = 40.0
+    size_ref: float | None = 50.0
     coast_output: float | None = 0.08
 
     def __post_init__(self) -> None:
@@ -321,7 +321,7 @@ def default(fps: float = 30.0) -> TrackerConfig:
     in stages, each the gated global nearest neighbour (``optimal``): a 10 px Euclidean gate,
     then 20 px for the tracks and detections left over, then the recovery stage (250 px/s
     from the last measurement) for established targets that turned or bounced. σ_z, the
-    gates and the recovery margin hold for boxes up to 40 px and stretch per axis with larger
+    gates and the recovery margin hold for boxes up to 50 px and stretch per axis with larger
     boxes (``size_ref``). Confirmation on 2 consecutive hits; a track coasts up to 0.3 s but
     its coasting rows are output only for the first 0.08 s (``coast_output``)."""
     return TrackerConfig(fps=fps)

@@ -76,6 +76,7 @@ class FastCVPredictor:
         # (a, b, c) ↦ F P Fᵀ: a + 2b + c, b + c, c (Δt = 1)
         self._FPF = np.array([[1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [1.0, 1.0, 1.0]])
         self._qvec = self.q * np.array([0.25, 0.5, 1.0])  # G q Gᵀ, G = [1/2, 1]ᵀ
+        self._P0 = np.array([self.r, 0.0, self.vel_var])  # diag(r, vel_var) as (a, b, c)
 
     def init(self, xy: FloatArray, r: FloatArray | None = None) -> CVState:
         """``K`` new tracks at ``xy`` (K, 2) with zero velocity.
@@ -87,7 +88,7 @@ class FastCVPredictor:
         x = np.zeros((k, 4))
         x[:, :2] = xy
         P = np.empty((k, 3))
-        P[:] = (self.r, 0.0, self.vel_var)
+        P[:] = self._P0
         if r is not None:
             P[:, 0] = r
         return CVState(x, P)
@@ -107,13 +108,12 @@ class FastCVPredictor:
         """
         x, P = state.x, state.P
         nu = z - x[:, :2]  # innovation per axis (NaN where missing)
-        ok = mask & ~np.isnan(nu[:, 0])
+        ok = mask & (nu[:, 0] == nu[:, 0])  # and not NaN
         w = ok / (P[:, 0] + (self.r if r is None else r))  # 1/S, eq. (3); 0 where no measurement
         gain = P[:, :2] * w[:, None]  # K = [a, b]ᵀ / S, eq. (3)
         nu[~ok] = 0.0
         xn = (x.reshape(-1, 2, 2) + gain[:, :, None] * nu[:, None, :]).reshape(-1, 4)  # (4)
-        Pn = np.empty_like(P)  # eq. (5): a r/S, b r/S, c − b²/S
-        Pn[:, :2] = P[:, :2] * (1.0 - gain[:, 0])[:, None]
+        Pn = P * (1.0 - gain[:, 0])[:, None]  # eq. (5): a r/S, b r/S, c − b²/S
         Pn[:, 2] = P[:, 2] - P[:, 1] * gain[:, 1]
         return CVState(xn, Pn)
 

@@ -102,7 +102,7 @@ def hand_out_ids(ints: IntArray, confirmed_now: BoolArray, next_id: int) -> int:
     order), so IDs stay consecutive and do not depend on the order of the detections. Returns
     the next free ID.
     """
-    idx = np.flatnonzero(confirmed_now)  # rows are kept in uid order
+    idx = confirmed_now.nonzero()[0]  # rows are kept in uid order
     ints[idx, TID] = np.arange(next_id, next_id + idx.size)
     return next_id + int(idx.size)
 

@@ -267,6 +267,7 @@ class Tracker:
         self._gate = self._distance.gate if self.config.gate is None else float(self.config.gate)
         # scaling of the detection-related pixel values with the box size (config.size_ref)
         ref = self.config.size_ref
+        self._ref = None if ref is None else float(ref)
         self._inv_ref2 = None if ref is None else 1.0 / float(ref) ** 2
         self._scale_r = self._inv_ref2 is not None and isinstance(self.predictor, FastCVPredictor)
         self.reset()
@@ -324,8 +325,11 @@ class Tracker:
             gxy = pred.position(ps)
             if fp.warmup_hits:
                 gxy = self._warmup_centre(tab, gxy, k)
-            f2 = None if self._inv_ref2 is None else self._size_scale2(tab.floats[:, WH])
-            r_rows = pred.r * self._r_factor(f2) if self._scale_r else None  # per track
+            f2 = r_rows = None  # size factors, only when a box is larger than size_ref
+            if self._ref is not None and np.count_nonzero(tab.floats[:, WH] > self._ref):
+                f2 = self._size_scale2(tab.floats[:, WH])
+                if self._scale_r:
+                    r_rows = pred.r * self._r_factor(f2)  # r f_x f_y per track
             staged = False
             if m == 0:
                 mt = md = ud = _EMPTY
@@ -333,7 +337,8 @@ class Tracker:
                 mt, md, ud, staged = self._associate_fast(ps, gxy, dets, f2, r_rows)
             else:
                 mt, md, ud = self._associate(ps, gxy, tab, dets)
-            det_index = np.full(n, -1, dtype=np.int64)
+            det_index = np.empty(n, dtype=np.int64)
+            det_index.fill(-1)
             det_index[mt] = md
             if self._gate2 is not None and not staged and ud.size and mt.size < n:
                 mt2, md2 = self._second_stage(gxy, det_index, dets, ud, f2)
@@ -353,7 +358,8 @@ class Tracker:
                     used[md2] = True
                     ud = ud[~used[ud]]
                     recovered = mt2
-            z = np.full((n, 2), np.nan)
+            z = np.empty((n, 2))
+            z.fill(np.nan)
             z[mt] = dets.xy[md]
             matched = det_index >= 0
             rescued = None
@@ -362,7 +368,7 @@ class Tracker:
                 rescued = self._rescue(rescue, tab, gxy, matched, z)  # fills z in place
                 if rescued is not None:
                     held = matched | rescued
-                    hi = np.flatnonzero(held)
+                    hi = held.nonzero()[0]
             if r_rows is None:
                 ps = pred.update(ps, z, held)  # measurement update, eqs. (3)–(5) of paper 1
             else:
@@ -381,12 +387,12 @@ class Tracker:
                 flo[mt, WH] += self.config.size_smoothing * (dets.wh[md] - flo[mt, WH])
             state, delete, confirmed_now = next_state(ints, matched, rescued, fp)
             ints[:, STATE] = state
-            if confirmed_now.any():
+            if np.count_nonzero(confirmed_now):
                 self._next_id = hand_out_ids(ints, confirmed_now, self._next_id)
             show = ~delete if self.config.output_tentative else ~delete & (state != TENTATIVE)
             if fp.coast_output is not None:  # long coasting: alive, but no longer output
                 show &= ints[:, MISSES] <= fp.coast_output
-            rows = np.flatnonzero(show)
+            rows = show.nonzero()[0]
             oi = ints[rows]
             of = np.concatenate(  # one gather for all float columns of the output
                 [z, pred.position(ps), gxy, flo[:, WH], pred.velocity(ps)], axis=1
@@ -397,8 +403,8 @@ class Tracker:
             )
             out_uid = oi[:, UID]
             tab = TrackTable(ints, flo)
-            if delete.any():
-                keep = np.flatnonzero(~delete)
+            if np.count_nonzero(delete):
+                keep = (~delete).nonzero()[0]
                 tab = tab.take(keep)
                 ps = _take_state(ps, keep)
         born = None
@@ -469,7 +475,7 @@ class Tracker:
             mt, md = a.track, a.det
         used = np.zeros(m, dtype=bool)
         used[md] = True
-        return mt, md, np.flatnonzero(~used), staged
+        return mt, md, (~used).nonzero()[0], staged
 
     def _second_stage(
         self, gxy: FloatArray, det_index: IntArray, dets: Detections, ud: NDArray[np.intp],
@@ -479,7 +485,7 @@ class Tracker:
         detections left unassigned, with the wider Euclidean gate ``second_gate`` (px, stretched
         per axis by the size factors ``f_x, f_y``) around the prediction (gated global nearest
         neighbour on the squared distance)."""
-        cand = np.flatnonzero(det_index < 0)
+        cand = (det_index < 0).nonzero()[0]
         g = self._gate2
         ti, dj, cost = fast_assoc.gate_pairs(
             gxy[cand], dets.xy[ud], None if f2 is None else f2[cand], g
@@ -504,12 +510,12 @@ class Tracker:
         and their detections.
         """
         ints = tab.ints
-        cand = np.flatnonzero(
+        cand = (
             (det_index < 0)
             # established: tentative tracks always have fewer than confirm_hits hits
             & (ints[:, HITS] >= max(self.config.recover_min_hits, self._fp.confirm_hits))
             & (ints[:, LAST_K] >= k - self._fp.recover_window)
-        )
+        ).nonzero()[0]
         if cand.size == 0:
             return _EMPTY, _EMPTY
         margin = self.config.recover_margin
@@ -541,7 +547,7 @@ class Tracker:
         elapsed frames after misses), and ``y_k`` after a single association.
         """
         warm = tab.hits < self._fp.warmup_hits
-        if not warm.any():
+        if not np.count_nonzero(warm):
             return pxy
         span = np.maximum(tab.last_k - tab.prev_k, 1)[:, None]
         gap = (k - tab.last_k)[:, None]
@@ -558,7 +564,7 @@ class Tracker:
         z: FloatArray,
     ) -> BoolArray | None:
         """Offer unmatched non-tentative tracks to ``rescue``; found positions go into ``z``."""
-        cand = np.flatnonzero(~matched & (tab.state != TENTATIVE))
+        cand = (~matched & (tab.state != TENTATIVE)).nonzero()[0]
         if cand.size == 0:
             return None
         found, rxy = rescue(tab.uid[cand], gxy[cand], tab.wh[cand])
@@ -585,7 +591,7 @@ class Tracker:
             ud = ud[birth_order(dets.xy[ud])]
         xy = dets.xy[ud]
         wh = dets.wh[ud]
-        if self._scale_r:  # r f² from the detection's box
+        if self._scale_r and np.count_nonzero(wh > self._ref):  # r f_x f_y from the detection's box
             r_new = self.predictor.r * self._r_factor(self._size_scale2(wh))
             new_ps = self.predictor.init(xy, r_new)
         else:
