@@ -285,3 +285,16 @@ def test_frame_differencing_splits_a_uniform_object_the_disturbance_map_keeps_wh
     assert len(f) == 2
     np.testing.assert_array_equal(np.sort(f.wh[:, 0]), [4, 4])
     assert len(d) == 1 and tuple(d.wh[0]) == (20, 20)
+
+
+def test_more_blobs_than_16_bit_labels_hold_are_all_found() -> None:
+    """Labelling uses 16-bit labels and falls back to 32-bit ones beyond 65535 blobs."""
+    from mvtrack.detection.blobs import blobs_from_mask
+
+    m = np.zeros((600, 600), np.uint8)
+    m[::2, ::2] = 255  # 90 000 isolated pixels, each its own 8-connected blob
+    dets = blobs_from_mask(m, 0, min_area=1)
+    assert len(dets) == 300 * 300
+    np.testing.assert_array_equal(np.sort(dets.xy[:, 0])[::300], np.arange(0, 600, 2))
+    small = blobs_from_mask(m[:20, :20], 0, min_area=1)
+    assert len(small) == 100

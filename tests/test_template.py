@@ -334,3 +334,68 @@ def test_masked_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None
     ref = cv2.matchTemplate(win, patch, cv2.TM_CCOEFF_NORMED, mask=mask)
     np.testing.assert_allclose(ours, ref, atol=2e-4)
     assert np.unravel_index(np.argmax(ours), ours.shape) == (7, 11)
+
+
+def test_search_radius_is_capped_by_max_radius() -> None:
+    pytest.importorskip("mvtrack.tracking.tracker")
+    from mvtrack import tracking
+
+    tracker = tracking.Tracker(tracking.paper1(fps=30, gate_px=20.0))
+    assert TemplateRescuer(TemplateBank(), tracker, max_radius=4).gate_radius == 4.0
+    assert TemplateRescuer(TemplateBank(), tracker, max_radius=50).gate_radius == 20.0
+    with pytest.raises(ValueError, match="max_radius"):
+        TemplateRescuer(TemplateBank(), tracker, max_radius=-1)
+    # a vehicle 6 px from the search centre is found with a 20 px radius, not with 4 px
+    tl = (50, 40)
+    bank = _bank_with_vehicle(tl)
+    frame = _frame(tl, seed=2)
+    off = [_centre(tl) + np.array([6.0, 0.0])]
+    assert bank.rescue(frame, [7], off, gate_radius=20)[0][0]
+    assert not bank.rescue(frame, [7], off, gate_radius=4)[0][0]
+
+
+def test_observe_maps_rows_by_row_uids_or_by_public_id_alike() -> None:
+    """The rescuer stores a frame's detected boxes under the tracker's uids, whether it reads
+    them from ``tracker.row_uids`` or looks them up by public ID."""
+    pytest.importorskip("mvtrack.tracking.tracker")
+    from types import SimpleNamespace
+
+    from mvtrack import tracking
+    from mvtrack.detection import DisturbanceMap
+
+    tracker = tracking.Tracker(tracking.preset("paper1", fps=30))
+    dm = DisturbanceMap()
+    by_row = TemplateRescuer(TemplateBank(), tracker, detector=dm)
+    shim = SimpleNamespace(tracks=None)  # no row_uids: lookup by track_id
+    by_id = TemplateRescuer(TemplateBank(), shim, detector=dm)
+    for _, frame, _ in _stop_and_go(60, 45, 100):
+        dets = dm(frame)
+        out = tracker.step(dets, rescue=by_row.callback(frame))
+        shim.tracks = tracker.tracks
+        by_row.observe(frame, dets, out)
+        by_id.observe(frame, dets, out)
+    assert len(by_row.bank) > 0
+    np.testing.assert_array_equal(by_row.bank.uids, by_id.bank.uids)
+    np.testing.assert_array_equal(by_row.bank.eligible, by_id.bank.eligible)
+    np.testing.assert_array_equal(by_row.bank._f, by_id.bank._f)
+
+
+def test_build_rescuer_gives_the_bank_the_detectors_mask_and_min_pixels() -> None:
+    pytest.importorskip("mvtrack.tracking.tracker")
+    from mvtrack.config import RunSettings
+    from mvtrack.detection import DisturbanceMap
+    from mvtrack.pipeline import build_rescuer, build_tracker
+
+    tracker = build_tracker(RunSettings(), 30.0)
+    dm = DisturbanceMap(min_area=40)
+    rescuer = build_rescuer(RunSettings(), tracker, dm)
+    assert rescuer.inner.detector is dm
+    assert rescuer.inner.bank.min_pixels == 20  # half the detector's min_area
+    assert rescuer.inner.max_radius == rescuer.max_shift == 4.0
+    own = build_rescuer(RunSettings(template_params={"min_pixels": 70}), tracker, dm)
+    assert own.inner.bank.min_pixels == 70
+    # the travel guard is the bank's (min_travel in box lengths, min_travel_px)
+    bank = build_rescuer(
+        RunSettings(template_params={"min_travel": 2.0, "min_travel_px": 15}), tracker
+    ).inner.bank
+    assert (bank.min_travel, bank.min_travel_px) == (2.0, 15.0)

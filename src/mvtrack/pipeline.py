@@ -331,23 +331,37 @@ def build_tracker(settings: RunSettings, fps: float) -> Any:
         raise InputError(f"tracker settings: {exc}") from None
 
 
-def build_rescuer(settings: RunSettings, tracker: Any) -> Rescuer:
+def build_rescuer(settings: RunSettings, tracker: Any, detector: Any = None) -> Rescuer:
     """Template matching for stopped vehicles (paper 1 §1.1 step 3) attached to ``tracker``.
 
     A :class:`~mvtrack.detection.template.TemplateBank` with ``settings.template_params``
-    (NCC ≥ 0.8 inside the gate radius, SPEC §1.1 [R]) in its
-    :class:`~mvtrack.detection.template.TemplateRescuer`, guarded by
-    :class:`StoppedVehicleRescuer`.
+    (NCC ≥ 0.8 inside the gate radius, SPEC §1.1 [R]; the bank owns the check that a track
+    has driven somewhere before it is searched: ``min_travel`` box lengths, ``min_travel_px``,
+    ``min_hits``) in its :class:`~mvtrack.detection.template.TemplateRescuer`, given the
+    ``detector`` (its foreground mask restricts the templates to the objects' own pixels),
+    guarded by :class:`StoppedVehicleRescuer` (``max_shift``).
+
+    With a detector and no ``min_pixels`` in the settings, a template needs half the
+    detector's ``min_area`` in object pixels (20 px at 320×240, 115 px at 768×576 with the
+    size-dependent defaults): the bank's fixed 50 px dropped the templates of two-tone vehicles
+    whose blob covers only one tone (two of the ten waiting vehicles of five ``intersection``
+    runs lost their track).
     """
     from mvtrack.detection.template import TemplateBank, TemplateRescuer
 
     params = dict(settings.template_params)
-    guard = {k: params.pop(k) for k in ("min_travel", "max_shift") if k in params}
+    min_area = getattr(getattr(detector, "blobs", None), "min_area", None)
+    if min_area and "min_pixels" not in params:
+        params["min_pixels"] = max(round(0.5 * min_area), 1)
+    max_shift = params.pop("max_shift", StoppedVehicleRescuer.MAX_SHIFT)
     try:
         bank = TemplateBank(**params)
+        guard = StoppedVehicleRescuer(None, tracker, max_shift)
     except TypeError as exc:
         raise InputError(f"template settings: {exc}") from None
-    return StoppedVehicleRescuer(TemplateRescuer(bank, tracker), tracker, **guard)
+    # matches farther than max_shift are refused: the NCC need not look beyond it
+    guard.inner = TemplateRescuer(bank, tracker, detector=detector, max_radius=guard.max_shift)
+    return guard
 
 
 class StoppedVehicleRescuer:
@@ -358,15 +372,16 @@ class StoppedVehicleRescuer:
     and a track held that way never ends:
 
     - a track that never moved (a ghost blob where a parked vehicle left, a pole flickering
-      under camera jitter) has a template of static scenery, which matches forever;
+      under camera jitter) has a template of static scenery, which matches forever — the
+      template bank searches only tracks that have driven somewhere
+      (:class:`~mvtrack.detection.template.TemplateBank`, ``min_travel``);
     - a duplicate track (two blobs of one two-tone vehicle) whose detection went to its twin
       follows the moving vehicle by template, frame after frame.
 
-    So a match is accepted only if the track has travelled at least ``min_travel`` px from
-    where it was born, the match lies within ``max_shift`` px of its last measured position
-    (a stopped vehicle stands where it was last seen), and no detection of this frame covers
-    the match (a detected object has not faded). All checks are array operations over the
-    missed tracks.
+    So the search is centred on the track's last measured position, a match is accepted only
+    if it lies within ``max_shift`` px of it (a stopped vehicle stands where it was last seen),
+    and no detection of this frame covers the match (a detected object has not faded). All
+    checks are array operations over the missed tracks.
 
     Parameters
     ----------
@@ -374,33 +389,19 @@ class StoppedVehicleRescuer:
         The NCC search (:mod:`mvtrack.detection.template`).
     tracker : mvtrack.tracking.Tracker
         Its ``tracks`` table gives each uid's last measurement.
-    min_travel : float
-        Pixels a track must have moved since birth to be rescued.
     max_shift : float
         Largest distance (px) between the match and the last measured position.
     """
 
-    def __init__(
-        self, inner: Any, tracker: Any, min_travel: float = 10.0, max_shift: float = 4.0
-    ) -> None:
-        if not (min_travel >= 0 and max_shift > 0):
-            raise InputError(
-                f"template settings: min_travel must be >= 0 and max_shift > 0, got "
-                f"{min_travel} and {max_shift}"
-            )
+    #: default ``max_shift`` in px
+    MAX_SHIFT = 4.0
+
+    def __init__(self, inner: Any, tracker: Any, max_shift: float = MAX_SHIFT) -> None:
+        if not max_shift > 0:
+            raise InputError(f"template settings: max_shift must be > 0, got {max_shift}")
         self.inner = inner
         self.tracker = tracker
-        self.min_travel = float(min_travel)
         self.max_shift = float(max_shift)
-        self._uid = np.zeros(0, np.int64)  # sorted uids seen so far
-        self._birth = np.zeros((0, 2))  # their first measured position
-        self._travel = np.zeros(0)  # the farthest they got from it
-
-    def _lookup(self, uids: NDArray[np.int64]) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
-        pos = np.searchsorted(self._uid, uids)
-        ok = pos < self._uid.size
-        ok[ok] = self._uid[pos[ok]] == uids[ok]
-        return np.minimum(pos, max(self._uid.size - 1, 0)), ok
 
     def callback(self, image: Image, dets: Detections) -> RescueFn:
         """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for this frame."""
@@ -409,25 +410,19 @@ class StoppedVehicleRescuer:
 
         def rescue(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any]:
             uids = np.asarray(uids, np.int64).reshape(-1)
-            k = uids.size
-            found = np.zeros(k, bool)
-            xy = np.full((k, 2), np.nan)
-            if self._uid.size == 0:
-                return found, xy
-            pos, known = self._lookup(uids)
-            moved = known & (self._travel[pos] >= self.min_travel)
-            if not moved.any():
-                return found, xy
             # a stopped vehicle stands where it was last measured: search around that place,
             # not around the prediction, which keeps drifting with the last velocity estimate
             order = np.argsort(tab.uid)
             at = order[np.searchsorted(tab.uid[order], uids)]
             last = tab.last_xy[at]
-            f_sub, xy_sub = search(uids[moved], last[moved], np.asarray(wh)[moved])
-            found[moved] = np.asarray(f_sub, bool)
-            xy[moved] = np.asarray(xy_sub, np.float64)
+            f_sub, xy_sub = search(uids, last, wh)
+            found = np.array(f_sub, bool)
+            xy = np.array(xy_sub, np.float64)
+            if not found.any():
+                return found, xy
             # the match must sit where the vehicle was last measured (it stands still)
-            found &= np.hypot(*(xy - last).T) <= self.max_shift
+            d = xy - last
+            found &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
             # and no detection may cover it (a detected object has not faded)
             if len(dets) and found.any():
                 lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
@@ -439,25 +434,8 @@ class StoppedVehicleRescuer:
         return rescue
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
-        """Feed the template bank; remember each track's birth place and travel."""
+        """Feed the template bank."""
         self.inner.observe(image, dets, tracks)
-        tab = self.tracker.tracks
-        uid = np.asarray(tab.uid, np.int64)
-        last = np.asarray(tab.last_xy, np.float64).reshape(-1, 2)
-        pos, known = self._lookup(uid)
-        if (~known).any():
-            allu = np.concatenate([self._uid, uid[~known]])
-            order = np.argsort(allu, kind="stable")
-            self._uid = allu[order]
-            self._birth = np.vstack([self._birth, last[~known]])[order]
-            self._travel = np.concatenate([self._travel, np.zeros(int((~known).sum()))])[order]
-            pos, known = self._lookup(uid)
-        dist = np.hypot(*(last - self._birth[pos]).T)
-        np.maximum.at(self._travel, pos, dist)
-        alive = np.isin(self._uid, uid)  # forget deleted tracks
-        self._uid, self._birth, self._travel = (
-            self._uid[alive], self._birth[alive], self._travel[alive]
-        )
 
 
 # --------------------------------------------------------------------------- gate overlay
@@ -631,7 +609,7 @@ def track_to_folder(
         detector, tracker = build_detector(settings), build_tracker(settings, fps)
     else:
         detector, tracker = parts
-    rescuer = build_rescuer(settings, tracker) if settings.templates else None
+    rescuer = build_rescuer(settings, tracker, detector) if settings.templates else None
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths: dict[str, Path] = {}

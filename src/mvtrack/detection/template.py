@@ -62,7 +62,7 @@ class _Template:
     """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
     the observation tick; for a masked template also the terms of :func:`masked_ncc`."""
 
-    __slots__ = ("mask", "mf", "offset", "patch", "tick", "tz", "var_t")
+    __slots__ = ("mask", "mf", "n", "offset", "patch", "tick", "tz", "var_t")
 
     def __init__(
         self, patch: Image, mask: Image | None, offset: tuple[float, float], tick: int
@@ -76,10 +76,15 @@ class _Template:
             t = patch.astype(np.float32)
             self.tz = (t - float(t[mask > 0].mean())) * self.mf  # T − T̄ on the mask, 0 off it
             self.var_t = float((self.tz * self.tz).sum())
+            self.n = float(self.mf.sum())
 
 
 def masked_ncc(
-    window: Image, tz: NDArray[np.float32], mf: NDArray[np.float32], var_t: float
+    window: Image,
+    tz: NDArray[np.float32],
+    mf: NDArray[np.float32],
+    var_t: float,
+    n: float | None = None,
 ) -> NDArray[np.float32]:
     r"""NCC of a template over its mask pixels ``M`` only, at every placement in ``window``.
 
@@ -93,17 +98,26 @@ def masked_ncc(
     with means over the ``n`` mask pixels: three plain correlations (``cv2.TM_CCORR``), the
     same values as ``cv2.matchTemplate(..., TM_CCOEFF_NORMED, mask=M)`` (to ~1e-5) at a third
     to two thirds of its cost. ``tz`` is :math:`(T - \bar T)` on the mask and 0 off it, ``mf``
-    the mask as 0/1 floats, ``var_t`` :math:`\sum_M (T - \bar T)^2`. Flat placements give NaN.
+    the mask as 0/1 floats, ``var_t`` :math:`\sum_M (T - \bar T)^2`, ``n`` the number of mask
+    pixels (counted if not given). Flat placements give NaN.
+
+    On the small windows of a gate search the fixed cost of each call dominates, so the
+    arithmetic is done in place on the correlation outputs (a few element-wise operations).
     """
+    if n is None:
+        n = float(mf.sum())
     w = window.astype(np.float32)
-    w -= float(w.mean())  # smaller sums, less float32 cancellation below
-    n = float(mf.sum())
-    num = cv2.matchTemplate(w, tz, cv2.TM_CCORR)
-    s1 = cv2.matchTemplate(w, mf, cv2.TM_CCORR)
-    s2 = cv2.matchTemplate(w * w, mf, cv2.TM_CCORR)
-    var_i = s2 - s1 * s1 / n
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return num / np.sqrt(np.where(var_i > 1e-6 * n, var_i, np.nan) * var_t)
+    w -= cv2.mean(window)[0]  # smaller sums, less float32 cancellation below
+    num = cv2.matchTemplate(w, tz, cv2.TM_CCORR)  # Σ_M (T − T̄) I_u
+    s1 = cv2.matchTemplate(w, mf, cv2.TM_CCORR)  # Σ_M I_u
+    var_i = cv2.matchTemplate(w * w, mf, cv2.TM_CCORR)  # Σ_M I_u²
+    var_i -= s1 * s1 * (1.0 / n)  # Σ_M (I_u − Ī_u)²
+    flat = var_i <= 1e-6 * n
+    np.maximum(var_i, 1e-6 * n, out=var_i)
+    var_i *= var_t
+    num /= np.sqrt(var_i, out=var_i)
+    num[flat] = np.nan
+    return num
 
 
 class TemplateBank:
@@ -203,16 +217,20 @@ class TemplateBank:
         self.clear()
 
     # ------------------------------------------------------------------ bookkeeping (arrays)
+    # Per track one row of ``_f`` (float64) and ``_i`` (int64), rows sorted by uid, so that a
+    # frame's update is a gather, a few column operations and a scatter whatever the number of
+    # tracks. Columns of ``_f``: the last full-size detected box (x, y, w, h), the reference
+    # box area (running maximum, decaying 1 % per detection), the first observed centre, the
+    # last observed centre (any detection, or a template match), and the distance of the last
+    # detection from the first. Columns of ``_i``: the tick of that box, detections observed.
+    _BOX, _AREA, _ORIGIN, _LAST, _TRAVEL = slice(0, 4), 4, slice(5, 7), slice(7, 9), 9
+    _TICK, _HITS = 0, 1
+
     def clear(self) -> None:
         """Forget everything."""
         self.uids = np.zeros(0, np.int64)
-        self._box = np.zeros((0, 4))  # x, y, w, h of the last full-size detection
-        self._det_tick = np.zeros(0, np.int64)  # its tick
-        self._area = np.zeros(0)  # reference box area: running maximum, decaying 1 %/detection
-        self._origin = np.zeros((0, 2))  # first observed centre
-        self._last = np.zeros((0, 2))  # last observed centre (any detection)
-        self._travel = np.zeros(0)  # distance of the last detection from the first
-        self._hits = np.zeros(0, np.int64)  # detections observed
+        self._f = np.zeros((0, 10))
+        self._i = np.zeros((0, 2), np.int64)
         self._templates: dict[int, _Template] = {}
         self._tick = -1
         self._frame: Image | None = None  # the frame of tick ``_tick``
@@ -224,6 +242,15 @@ class TemplateBank:
 
     def __contains__(self, uid: object) -> bool:
         return isinstance(uid, (int, np.integer)) and bool(np.isin(uid, self.uids))
+
+    def _rows(self, uids: IntArray) -> tuple[IntArray, BoolArray]:
+        """Row of each of ``uids`` in the sorted table (clipped) and whether it is there."""
+        n = self.uids.size
+        if n == 0:
+            return np.zeros(uids.size, np.int64), np.zeros(uids.size, bool)
+        pos = np.searchsorted(self.uids, uids)
+        np.minimum(pos, n - 1, out=pos)
+        return pos, self.uids[pos] == uids
 
     def observe(
         self,
@@ -262,59 +289,69 @@ class TemplateBank:
                 f"observe: uids, xy and wh need one row per track, got {uids.size}, "
                 f"{xy.shape[0]}, {wh.shape[0]}"
             )
-        if np.unique(uids).size != uids.size:
-            raise ValueError("observe: uids must be distinct")
-        box = np.hstack([xy, wh])
-        area = wh.prod(axis=1)
-        pos = np.searchsorted(self.uids, uids)
-        known = pos < self.uids.size
-        known[known] = self.uids[pos[known]] == uids[known]
-        pk = pos[known]
-        full = area[known] >= self.min_fill * self._area[pk]
-        # a track whose detection just shrank keeps its last full appearance: cut it now from
-        # the kept frame, before that frame is replaced (a loop over these few tracks only)
-        for i in pk[~full & (self._det_tick[pk] == self._tick)].tolist():
-            self._current(i)
+        if uids.size > 1:
+            s = np.sort(uids)
+            if (s[1:] == s[:-1]).any():
+                raise ValueError("observe: uids must be distinct")
+        if mask is not None and mask.shape != frame.shape[:2]:
+            raise ValueError(f"observe: mask is {mask.shape}, the frame {frame.shape[:2]}")
+        self._record(frame, uids, xy, wh, mask)
+
+    def _record(
+        self, frame: Image, uids: IntArray, xy: FloatArray, wh: FloatArray, mask: Image | None
+    ) -> None:
+        """:meth:`observe` without the checks of its arguments (distinct uids, shapes)."""
+        pos, known = self._rows(uids)
+        if not known.all():  # new tracks: insert empty rows (kept sorted), then as known ones
+            new = ~known
+            nn = int(new.sum())
+            f = np.zeros((nn, 10))
+            f[:, self._ORIGIN] = xy[new]
+            i = np.zeros((nn, 2), np.int64)
+            i[:, self._TICK] = -1
+            allu = np.concatenate([self.uids, uids[new]])
+            order = np.argsort(allu, kind="stable")
+            self.uids = allu[order]
+            self._f = np.concatenate([self._f, f])[order]
+            self._i = np.concatenate([self._i, i])[order]
+            pos, _ = self._rows(uids)
+        f = self._f[pos]
+        area = wh[:, 0] * wh[:, 1]
+        full = area >= self.min_fill * f[:, self._AREA]
+        shrunk = ~full
+        if shrunk.any():
+            # a track whose detection just shrank keeps its last full appearance: cut it now
+            # from the kept frame, before that frame is replaced (a loop over these few only)
+            for r in pos[shrunk & (self._i[pos, self._TICK] == self._tick)].tolist():
+                self._current(r)
         self._tick += 1
         self._frame = frame
         if mask is None:
             self._mask = None
         else:
-            if mask.shape != frame.shape[:2]:
-                raise ValueError(f"observe: mask is {mask.shape}, the frame {frame.shape[:2]}")
             if self._mask_buf is None or self._mask_buf.shape != mask.shape:
                 self._mask_buf = np.empty(mask.shape, np.uint8)
             np.copyto(self._mask_buf, mask, casting="unsafe")
             self._mask = self._mask_buf
-        # refresh known tracks in place, insert the new ones (kept sorted)
-        g = pk[full]
-        self._box[g] = box[known][full]
-        self._det_tick[g] = self._tick
-        self._area[pk] = np.maximum(area[known], 0.99 * self._area[pk])
-        self._travel[pk] = np.hypot(*(xy[known] - self._origin[pk]).T)
-        self._last[pk] = xy[known]
-        self._hits[pk] += 1
-        new = ~known
-        if new.any():
-            allu = np.concatenate([self.uids, uids[new]])
-            order = np.argsort(allu, kind="stable")
-            nn = int(new.sum())
-            self.uids = allu[order]
-            self._box = np.vstack([self._box, box[new]])[order]
-            tick = np.full(nn, self._tick, np.int64)
-            self._det_tick = np.concatenate([self._det_tick, tick])[order]
-            self._origin = np.vstack([self._origin, xy[new]])[order]
-            self._last = np.vstack([self._last, xy[new]])[order]
-            self._travel = np.concatenate([self._travel, np.zeros(nn)])[order]
-            self._hits = np.concatenate([self._hits, np.ones(nn, np.int64)])[order]
-            self._area = np.concatenate([self._area, area[new]])[order]
+        f[full, 0:2] = xy[full]
+        f[full, 2:4] = wh[full]
+        np.maximum(area, 0.99 * f[:, self._AREA], out=f[:, self._AREA])
+        f[:, self._LAST] = xy
+        d = xy - f[:, self._ORIGIN]
+        f[:, self._TRAVEL] = np.hypot(d[:, 0], d[:, 1])
+        self._f[pos] = f
+        self._i[pos[full], self._TICK] = self._tick
+        self._i[pos, self._HITS] += 1
+
+    def _eligible_rows(self, f: FloatArray, i: IntArray) -> BoolArray:
+        size = np.maximum(f[:, 2], f[:, 3])
+        need = np.maximum(self.min_travel * size, self.min_travel_px)
+        return (f[:, self._TRAVEL] >= need) & (i[:, self._HITS] >= self.min_hits)
 
     @property
     def eligible(self) -> BoolArray:
         """Per track in :attr:`uids`: far enough from its first detection, often enough seen."""
-        size = self._box[:, 2:].max(axis=1, initial=0.0)
-        need = np.maximum(self.min_travel * size, self.min_travel_px)
-        return (self._travel >= need) & (self._hits >= self.min_hits)
+        return self._eligible_rows(self._f, self._i)
 
     def retain(self, uids: ArrayLike) -> None:
         """Keep only the tracks in ``uids`` (the live ones); forget deleted tracks."""
@@ -332,13 +369,8 @@ class TemplateBank:
         for u in self.uids[~keep].tolist():
             self._templates.pop(u, None)
         self.uids = self.uids[keep]
-        self._box = self._box[keep]
-        self._det_tick = self._det_tick[keep]
-        self._origin = self._origin[keep]
-        self._last = self._last[keep]
-        self._travel = self._travel[keep]
-        self._hits = self._hits[keep]
-        self._area = self._area[keep]
+        self._f = self._f[keep]
+        self._i = self._i[keep]
 
     # ------------------------------------------------------------------------- templates
     def _cut(self, i: int) -> _Template | None:
@@ -347,7 +379,7 @@ class TemplateBank:
             return None
         frame = self._frame
         height, width = frame.shape[:2]
-        x, y, w, h = self._box[i]
+        x, y, w, h = self._f[i, self._BOX]
         left = math.floor(x - (w - 1) / 2 + 0.5)
         top = math.floor(y - (h - 1) / 2 + 0.5)
         x0, y0 = max(left, 0), max(top, 0)
@@ -368,7 +400,7 @@ class TemplateBank:
         if spread < self.min_std:
             return None
         return _Template(
-            np.ascontiguousarray(patch), mask, (x - x0, y - y0), int(self._det_tick[i])
+            np.ascontiguousarray(patch), mask, (x - x0, y - y0), int(self._i[i, self._TICK])
         )
 
     def template(self, uid: int) -> Image | None:
@@ -382,8 +414,9 @@ class TemplateBank:
     def _current(self, i: int) -> _Template | None:
         uid = int(self.uids[i])
         t = self._templates.get(uid)
-        due = t is None or t.tick < self._det_tick[i]
-        if due and self._det_tick[i] == self._tick:  # last detected in the kept frame
+        tick = int(self._i[i, self._TICK])
+        due = t is None or t.tick < tick
+        if due and tick == self._tick:  # last detected in the kept frame
             t = self._cut(i)
             if t is None:
                 self._templates.pop(uid, None)
@@ -452,23 +485,30 @@ class TemplateBank:
         score = np.full(k, np.nan)
         if k == 0 or self.uids.size == 0:
             return found, out, score
-        pos = np.searchsorted(self.uids, uids)
-        has = pos < self.uids.size
-        has[has] = self.uids[pos[has]] == uids[has]
-        has &= np.isfinite(pxy).all(axis=1)
-        has[has] = self.eligible[pos[has]]  # tracks that have driven somewhere
+        pos, has = self._rows(uids)
+        f = self._f[pos]
+        has &= self._eligible_rows(f, self._i[pos])  # tracks that have driven somewhere
         if self.max_drift is not None:  # ... and have come to rest where last seen
-            drift = np.hypot(*(pxy[has] - self._last[pos[has]]).T)
-            has[has] = drift <= self.max_drift
+            d = pxy - f[:, self._LAST]
+            has &= np.hypot(d[:, 0], d[:, 1]) <= self.max_drift  # False for a NaN prediction
+        else:
+            has &= np.isfinite(pxy).all(axis=1)
+        if not has.any():
+            return found, out, score
         height, width = frame.shape[:2]
         ri = math.floor(r)
-        for j in np.flatnonzero(has).tolist():  # the missed tracks only
+        r2 = r * r
+        p_list = pxy.tolist()
+        # the only per-track loop: the few missed tracks that qualify, each one NCC of its
+        # template over a small window around its gate (one cv2 call on that region; there is
+        # no batched form of matchTemplate for templates and windows of different sizes)
+        for j in np.flatnonzero(has).tolist():
             t = self._current(int(pos[j]))
             if t is None:
                 continue
             ph, pw = t.patch.shape
             ox, oy = t.offset
-            px, py = pxy[j]
+            px, py = p_list[j]
             # top-left of the template when its box centre sits on the prediction
             tx, ty = round(px - ox), round(py - oy)
             if tx < 0 or ty < 0 or tx + pw > width or ty + ph > height:
@@ -479,21 +519,20 @@ class TemplateBank:
             if t.mask is None:
                 ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
             else:  # NCC over the object's pixels only
-                ncc = masked_ncc(window, t.tz, t.mf, t.var_t)
+                ncc = masked_ncc(window, t.tz, t.mf, t.var_t, t.n)
+            cv2.patchNaNs(ncc, -2.0)  # flat placements: no correlation
             # centre of placement (row i, col c) is (x0 + c + ox, y0 + i + oy); circular gate
-            cx = x0 + np.arange(ncc.shape[1]) + ox - px
-            cy = y0 + np.arange(ncc.shape[0]) + oy - py
-            outside = cy[:, None] ** 2 + cx[None, :] ** 2 > r * r
-            ncc[outside | ~np.isfinite(ncc)] = -np.inf
-            i, c = np.unravel_index(int(np.argmax(ncc)), ncc.shape)
-            best = float(ncc[i, c])
-            if not math.isfinite(best):
+            cx = np.arange(ncc.shape[1]) + (x0 + ox - px)
+            cy = np.arange(ncc.shape[0]) + (y0 + oy - py)
+            inside = cv2.compare(np.add.outer(cy * cy, cx * cx), r2, cv2.CMP_LE)
+            _, best, _, (c, i) = cv2.minMaxLoc(ncc, inside)
+            if c < 0 or best < -1.0:  # nothing inside the gate, or only flat placements
                 continue
             score[j] = best
             out[j] = (x0 + c + ox, y0 + i + oy)
             found[j] = best >= self.min_score
             if found[j]:
-                self._last[pos[j]] = out[j]  # held: the match is its last known place
+                self._f[pos[j], self._LAST] = out[j]  # held: the match is its last place
         out[~found] = np.nan
         return found, out, score
 
@@ -547,6 +586,11 @@ class TemplateRescuer:
         templates to the objects' own pixels (see :meth:`TemplateBank.observe`). Strongly
         recommended: without it a template is the whole box, road included, and it can keep
         matching the empty road after a pedestrian or vehicle has left.
+    max_radius : float, optional
+        Search no farther than this (px) from the centre the tracker gives, even if the gate
+        is wider. For a caller that accepts only matches this close (the pipeline's
+        ``max_shift`` around a stopped vehicle's last position) the rest of the gate is
+        wasted work: an NCC over a 20 px gate costs (2·20 + 1)² placements, over 4 px 9².
     """
 
     def __init__(
@@ -555,11 +599,15 @@ class TemplateRescuer:
         tracker: Any = None,
         gate_radius: float | None = None,
         detector: Any = None,
+        max_radius: float | None = None,
     ) -> None:
+        if max_radius is not None and not max_radius >= 0:
+            raise ValueError(f"max_radius must be ≥ 0 px or None, got {max_radius}")
         self.bank = bank
         self.tracker = tracker
         self.detector = detector
         self._radius = gate_radius
+        self.max_radius = None if max_radius is None else float(max_radius)
 
     def attach(self, tracker: Any) -> None:
         """Use ``tracker`` (and forget templates of any previous one)."""
@@ -568,10 +616,12 @@ class TemplateRescuer:
 
     @property
     def gate_radius(self) -> float:
-        """The search radius in px."""
+        """The search radius in px (the gate, capped at ``max_radius``)."""
         if self._radius is not None:
-            return float(self._radius)
-        return gate_radius_of(self.tracker, self.bank.gate_radius)
+            r = float(self._radius)
+        else:
+            r = gate_radius_of(self.tracker, self.bank.gate_radius)
+        return r if self.max_radius is None else min(r, self.max_radius)
 
     def callback(self, frame: Image) -> RescueFn:
         """The ``rescue`` argument of ``tracker.step`` for ``frame``."""
@@ -580,27 +630,39 @@ class TemplateRescuer:
     def observe(self, frame: Image, dets: Detections, tracks: TrackFrame) -> None:
         """Record the detected boxes of this frame's tracks; forget deleted tracks.
 
-        Rows of ``tracks`` with ``det_index ≥ 0`` and a public ID are mapped to the tracker's
-        internal uids through ``tracker.tracks`` (``uid``, ``track_id``) and stored with the
-        detection's box (the last detected appearance).
+        Rows of ``tracks`` with ``det_index ≥ 0`` and a public ID are stored under the
+        tracker's internal uid (``tracker.row_uids``, row-aligned with its last output; or, for
+        a tracker without it, looked up through ``tracker.tracks`` by ``track_id``) with the
+        detection's box (the last detected appearance). Deleted tracks are forgotten once the
+        bank holds more tracks than the tracker has live ones (so at most twice as many).
         """
         if self.tracker is None:
             raise ValueError("TemplateRescuer: attach a tracker before observing frames")
+        det = tracks.det_index
+        rows = (det >= 0) & (tracks.track_id > 0)
+        row_uids = getattr(self.tracker, "row_uids", None)
+        if row_uids is not None and len(row_uids) == len(det):
+            uids = row_uids[rows]
+            d = det[rows]
+        else:
+            uids, d = self._uids_by_id(tracks.track_id[rows], det[rows])
+        table = self.tracker.tracks
+        if self.bank.uids.size > len(table):  # some are dead: forget them
+            self.bank.retain(table.uid)
+        mask = getattr(self.detector, "mask", None) if self.detector is not None else None
+        if mask is not None and mask.shape != frame.shape[:2]:
+            raise ValueError(f"observe: mask is {mask.shape}, the frame {frame.shape[:2]}")
+        self.bank._record(frame, uids, dets.xy[d], dets.wh[d], mask)
+
+    def _uids_by_id(self, ids: IntArray, det: IntArray) -> tuple[IntArray, IntArray]:
+        """Internal uids of public ``ids`` through ``tracker.tracks`` (unknown ones dropped)."""
         table = self.tracker.tracks
         t_uid = np.asarray(table.uid, np.int64)
         t_id = np.asarray(table.track_id, np.int64)
-        det = np.asarray(tracks.det_index, np.int64)
-        rows = (det >= 0) & (np.asarray(tracks.track_id) > 0)
-        ids = np.asarray(tracks.track_id, np.int64)[rows]
-        if t_id.size and ids.size:
-            order = np.argsort(t_id, kind="stable")
-            sorted_ids = t_id[order]
-            pos = np.minimum(np.searchsorted(sorted_ids, ids), t_id.size - 1)
-            ok = sorted_ids[pos] == ids
-            uids = t_uid[order][pos][ok]
-            d = det[rows][ok]
-        else:
-            uids = d = np.zeros(0, np.int64)
-        self.bank.retain(t_uid)
-        mask = getattr(self.detector, "mask", None) if self.detector is not None else None
-        self.bank.observe(frame, uids, dets.xy[d], dets.wh[d], mask)
+        if not (t_id.size and ids.size):
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        order = np.argsort(t_id, kind="stable")
+        sorted_ids = t_id[order]
+        pos = np.minimum(np.searchsorted(sorted_ids, ids), t_id.size - 1)
+        ok = sorted_ids[pos] == ids
+        return t_uid[order][pos][ok], det[ok]

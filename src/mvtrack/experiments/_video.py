@@ -69,7 +69,7 @@ def track_scene(
             det(empty)
     tracker = Tracker(config)
     rescue_settings = RunSettings(template_params=dict(template_params or {}))
-    rescuer = build_rescuer(rescue_settings, tracker) if templates else None
+    rescuer = build_rescuer(rescue_settings, tracker, det) if templates else None
     source = frames if frames is not None else render_frames(scene, seed)
     result = run_frames(source, det, tracker, rescuer=rescuer, progress=False)
     log = TrackLog()
