@@ -8,6 +8,7 @@ terms (``mvtrack.detection.make_detector``).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import cv2
 import numpy as np
@@ -47,11 +48,12 @@ class DisturbanceMap(FrontEnd):
         :math:`T` in grey levels (SPEC §1.1 [R]).
     beta_min : float, default 0.02
         Floor of the learning rate :math:`\beta_k` (SPEC §1.1 [R]).
-    min_area, max_area, open_size, close_size, connectivity, center
-        The blob stage, see :class:`~mvtrack.detection.blobs.BlobExtractor` (defaults 20, None,
-        3, 0, 8, "centroid"). ``close_size`` (e.g. 7) merges fragments of one object.
     warmup : int, default 0
         Frames after a reset whose detections are suppressed.
+    **blob
+        The blob stage's keywords ``min_area, max_area, open_size, close_size, connectivity,
+        center``, see :class:`~mvtrack.detection.blobs.BlobExtractor` (defaults 20, None, 3,
+        0, 8, "centroid"). ``close_size`` (e.g. 7) merges fragments of one object.
 
     Notes
     -----
@@ -67,19 +69,12 @@ class DisturbanceMap(FrontEnd):
         threshold: float = 25.0,
         beta_min: float = 0.02,
         *,
-        min_area: float = 20.0,
-        max_area: float | None = None,
-        open_size: int = 3,
-        close_size: int = 0,
-        connectivity: int = 8,
-        center: str = "centroid",
         warmup: int = 0,
+        **blob: Any,
     ) -> None:
         if not (0.0 < beta_min <= 1.0):
             raise ValueError(f"beta_min must be in (0, 1], got {beta_min}")
-        super().__init__(
-            BlobExtractor(min_area, max_area, open_size, close_size, connectivity, center), warmup
-        )
+        super().__init__(BlobExtractor(**blob), warmup)
         self.threshold = _check_threshold(threshold)
         self.beta_min = float(beta_min)
         self._reset_model()
@@ -131,17 +126,10 @@ class FrameDifference(FrontEnd):
         self,
         threshold: float = 25.0,
         *,
-        min_area: float = 20.0,
-        max_area: float | None = None,
-        open_size: int = 3,
-        close_size: int = 0,
-        connectivity: int = 8,
-        center: str = "centroid",
         warmup: int = 0,
+        **blob: Any,
     ) -> None:
-        super().__init__(
-            BlobExtractor(min_area, max_area, open_size, close_size, connectivity, center), warmup
-        )
+        super().__init__(BlobExtractor(**blob), warmup)
         self.threshold = _check_threshold(threshold)
         self._reset_model()
 
@@ -187,7 +175,7 @@ class MOG2(FrontEnd):
         OpenCV's learning rate; negative chooses it from ``history``.
     use_color : bool, default True
         Model the BGR frame (True) or its luminance (False).
-    min_area, max_area, open_size, close_size, connectivity, center, warmup
+    warmup, **blob
         As in :class:`DisturbanceMap`.
     """
 
@@ -201,21 +189,14 @@ class MOG2(FrontEnd):
         learning_rate: float = -1.0,
         use_color: bool = True,
         *,
-        min_area: float = 20.0,
-        max_area: float | None = None,
-        open_size: int = 3,
-        close_size: int = 0,
-        connectivity: int = 8,
-        center: str = "centroid",
         warmup: int = 0,
+        **blob: Any,
     ) -> None:
         if history < 1:
             raise ValueError(f"history must be ≥ 1 frame, got {history}")
         if not var_threshold > 0:
             raise ValueError(f"var_threshold must be positive, got {var_threshold}")
-        super().__init__(
-            BlobExtractor(min_area, max_area, open_size, close_size, connectivity, center), warmup
-        )
+        super().__init__(BlobExtractor(**blob), warmup)
         self.history = int(history)
         self.var_threshold = float(var_threshold)
         self.detect_shadows = bool(detect_shadows)

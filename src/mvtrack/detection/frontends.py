@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 from mvtrack.detection.background import MOG2, DisturbanceMap, FrameDifference
 from mvtrack.detection.base import FrontEnd
+from mvtrack.detection.blobs import BlobExtractor
 
 #: Front-end names accepted by :func:`make_detector`, and their classes.
 DETECTORS: dict[str, type[FrontEnd]] = {
@@ -39,6 +41,15 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
         raise ValueError(
             f"unknown detector {name!r}; choose one of: {', '.join(DETECTORS)}"
         ) from None
+    known = {
+        p.name for p in inspect.signature(cls).parameters.values() if p.kind != p.VAR_KEYWORD
+    } | set(inspect.signature(BlobExtractor).parameters)
+    unknown = sorted(set(params) - known)
+    if unknown:
+        raise ValueError(
+            f"detector {name!r}: unknown parameter {', '.join(map(repr, unknown))} "
+            f"(known: {', '.join(sorted(known))})"
+        )
     try:
         return cls(**params)
     except TypeError as exc:
