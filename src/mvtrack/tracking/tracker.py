@@ -270,6 +270,7 @@ class Tracker:
         self._ref = None if ref is None else float(ref)
         self._inv_ref2 = None if ref is None else 1.0 / float(ref) ** 2
         self._scale_r = self._inv_ref2 is not None and isinstance(self.predictor, FastCVPredictor)
+        self._birth_row = np.array([0, -1, TENTATIVE, 1, 0, 1, 0, 0], dtype=np.int64)
         self.reset()
 
     def reset(self) -> None:
@@ -521,11 +522,13 @@ class Tracker:
         margin = self.config.recover_margin
         if f2 is not None:
             margin = margin * np.sqrt(self._r_factor(f2[cand]))
-        radius = self._fp.recover_speed * (k - tab.last_k[cand]) + margin
+        radius = self._fp.recover_speed * (k - ints[cand, LAST_K]) + margin
+        r2 = radius * radius
+        last_xy = tab.floats[cand, LAST_XY]
         if cand.size * ud.size <= fast_assoc.DENSE_LSA:
-            mt, md = fast_assoc.dense_optimal(tab.last_xy[cand], dets.xy[ud], radius**2, 1.0)
+            mt, md = fast_assoc.dense_optimal(last_xy, dets.xy[ud], r2, 1.0)
         else:
-            ti, dj, cost = fast_assoc.gate_pairs(tab.last_xy[cand], dets.xy[ud], radius**2, 1.0)
+            ti, dj, cost = fast_assoc.gate_pairs(last_xy, dets.xy[ud], r2, 1.0)
             mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
         return cand[mt], ud[md]
 
@@ -596,8 +599,10 @@ class Tracker:
             new_ps = self.predictor.init(xy, r_new)
         else:
             new_ps = self.predictor.init(xy)
+        row = self._birth_row  # uid, track_id, state, hits, misses, age, last_k, prev_k
+        row[LAST_K:] = k
         ints = np.empty((b, N_INT), dtype=np.int64)
-        ints[:] = (0, -1, TENTATIVE, 1, 0, 1, k, k)
+        ints[:] = row
         ints[:, UID] = np.arange(self._next_uid, self._next_uid + b)
         self._next_uid += b
         one = self._fp.confirm_hits <= 1
