@@ -59,7 +59,9 @@ def _scene(rng, n, m, spread):
     return txy, dxy
 
 
-@pytest.mark.parametrize("n, m, spread", [(8, 9, 80.0), (300, 280, 700.0), (2000, 1900, 1500.0)])
+@pytest.mark.parametrize(
+    "n, m, spread", [(8, 9, 80.0), (100, 103, 400.0), (300, 280, 700.0), (2000, 1900, 1500.0)]
+)
 @pytest.mark.parametrize("metric", ["euclidean", "mahalanobis"])
 def test_gate_pairs_equal_association_candidate_pairs(n, m, spread, metric) -> None:
     rng = np.random.default_rng(n)
@@ -154,7 +156,7 @@ def test_dense_two_stage_equals_two_sparse_stages(stretch: bool) -> None:
         np.testing.assert_array_equal(ud, np.setdiff1d(np.arange(33), md))
 
 
-@pytest.mark.parametrize("n, m, spread", [(7, 9, 60.0), (400, 380, 800.0)])
+@pytest.mark.parametrize("n, m, spread", [(7, 9, 60.0), (100, 95, 300.0), (900, 880, 1200.0)])
 def test_gate_pairs_with_per_axis_factors_equal_a_hand_computed_ellipse(n, m, spread) -> None:
     rng = np.random.default_rng(n + 7)
     txy, dxy = _scene(rng, n, m, spread)
