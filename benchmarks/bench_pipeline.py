@@ -9,16 +9,20 @@ Sequences:
   too. If the renderer is unavailable, a simple scene of textured rectangles on noisy grey is
   rendered here instead (the table says which).
 
-Stages, each timed over the whole sequence: ``decode`` (``open_source`` only), ``+ detect``
-(decode and :class:`~mvtrack.detection.DisturbanceMap` with its SPEC §1.1 defaults),
-``+ track`` (also :class:`~mvtrack.tracking.Tracker` with the ``default`` preset at the
-source's frame rate) and ``+ track + templates`` (also template matching of stopped vehicles,
-:class:`~mvtrack.detection.template.TemplateRescuer` fed with the detector's mask). No video is
-written; rendering the synthetic video is not timed.
+Stages, each timed over the whole sequence, built exactly as ``mvtrack track --no-video`` builds
+them (:func:`mvtrack.pipeline.resolve_settings` for the video's size, then
+:func:`~mvtrack.pipeline.build_detector`, :func:`~mvtrack.pipeline.build_tracker`,
+:func:`~mvtrack.pipeline.build_rescuer`, run by :func:`~mvtrack.pipeline.run_frames`):
+``decode`` (``open_source`` only), ``+ detect`` (decode and the disturbance map with the
+pipeline's size-dependent defaults), ``+ track`` (also the ``default`` tracker preset at the
+source's frame rate, ``templates.enabled = false``) and ``+ track + templates`` (also template
+matching of stopped vehicles, the default). No video is written; rendering the synthetic video
+is not timed.
 
 Time is the CPU time of the process (``time.process_time``), what one dedicated core takes;
 wall-clock time is printed beside it because the machine may be shared. OpenCV runs on one
-thread (``cv2.setNumThreads(1)``) and BLAS is pinned to one thread before NumPy loads. After an
+thread (``cv2.setNumThreads(1)``), the decoder too (``open_source(..., threads=1)``; FFmpeg
+otherwise decodes with several) and BLAS is pinned to one thread before NumPy loads. After an
 untimed 50-frame warm-up per stage, each figure is the median of ``--repeats`` interleaved runs;
 the decode share is the median decode CPU time over the median CPU time of the stage.
 
@@ -41,13 +45,11 @@ import statistics  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from mvtrack.detection import make_detector  # noqa: E402
 from mvtrack.io.video import open_source  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -107,32 +109,34 @@ def run_stage(
     video: Path, stage: str, detector: str, max_frames: int | None = None
 ) -> tuple[int, float, float]:
     """Frames processed, CPU seconds and wall seconds for one pass of ``stage`` over ``video``."""
-    with open_source(video) as src:
-        det: Callable | None = None
-        tracker = rescuer = None
-        if stage != "decode":
-            det = make_detector(detector)
-        if stage in ("track", "track+tm"):
-            from mvtrack.detection.template import TemplateBank, TemplateRescuer
-            from mvtrack.tracking import Tracker, preset
+    from mvtrack.config import RunSettings
+    from mvtrack.pipeline import (
+        build_detector,
+        build_rescuer,
+        build_tracker,
+        resolve_settings,
+        run_frames,
+    )
 
-            tracker = Tracker(preset("default", fps=src.fps))
-            if stage == "track+tm":
-                rescuer = TemplateRescuer(TemplateBank(), tracker, detector=det)
-        n = 0
+    with open_source(video, threads=1) as src:
+        frames = (frame for _, frame in src)
+        settings = resolve_settings(RunSettings(detector=detector, video=False), src.size)
+        det = build_detector(settings) if stage != "decode" else None
+        tracker = build_tracker(settings, src.fps) if stage in ("track", "track+tm") else None
+        rescuer = build_rescuer(settings, tracker, det) if stage == "track+tm" else None
         c0, t0 = time.process_time(), time.perf_counter()
-        for _, frame in src:
-            if max_frames is not None and n >= max_frames:
-                break
-            if det is not None:
-                dets = det(frame)
-                if tracker is not None:
-                    if rescuer is None:
-                        tracker.step(dets)
-                    else:
-                        out = tracker.step(dets, rescue=rescuer.callback(frame))
-                        rescuer.observe(frame, dets, out)
-            n += 1
+        if tracker is None:
+            n = 0
+            for frame in frames:
+                if max_frames is not None and n >= max_frames:
+                    break
+                if det is not None:
+                    det(frame)
+                n += 1
+        else:
+            n = run_frames(
+                frames, det, tracker, rescuer=rescuer, max_frames=max_frames, progress=False
+            ).n_frames
         return n, time.process_time() - c0, time.perf_counter() - t0
 
 

@@ -298,3 +298,23 @@ def test_more_blobs_than_16_bit_labels_hold_are_all_found() -> None:
     np.testing.assert_array_equal(np.sort(dets.xy[:, 0])[::300], np.arange(0, 600, 2))
     small = blobs_from_mask(m[:20, :20], 0, min_area=1)
     assert len(small) == 100
+
+
+@pytest.mark.parametrize("close_size", [3, 6, 7, 9])
+def test_closing_around_the_foreground_equals_closing_the_whole_mask(close_size: int) -> None:
+    """The blob stage closes only the foreground's bounding rectangle plus a margin; the
+    result must be the closing of the whole image, also for blobs touching the border."""
+    rng = np.random.default_rng(close_size)
+    rect = cv2.getStructuringElement(cv2.MORPH_RECT, (3, 3))
+    ellipse = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_size, close_size))
+    for _ in range(60):
+        h, w = rng.integers(20, 100, 2)
+        m = np.zeros((h, w), np.uint8)
+        for _ in range(rng.integers(1, 6)):
+            y, x = rng.integers(0, h), rng.integers(0, w)
+            dh, dw = rng.integers(1, 15, 2)
+            m[y : y + dh, x : x + dw] = 255
+        m[rng.random((h, w)) < 0.02] = 255
+        ours = BlobExtractor(open_size=3, close_size=close_size).clean(m)
+        ref = cv2.morphologyEx(cv2.morphologyEx(m, cv2.MORPH_OPEN, rect), cv2.MORPH_CLOSE, ellipse)
+        np.testing.assert_array_equal(ours, ref)

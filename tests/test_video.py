@@ -194,3 +194,14 @@ def test_unreachable_stream_and_absent_camera_are_input_errors() -> None:
         open_source("rtsp://127.0.0.1:1/none")
     with pytest.raises(InputError, match="cannot open camera 97"):
         open_source("97")
+
+
+def test_one_decoder_thread_gives_the_same_frames(tmp_path: Path) -> None:
+    frames = [np.full((48, 64, 3), 8 * i, np.uint8) for i in range(6)]
+    path = tmp_path / "ramp.avi"
+    _write_avi(path, frames)
+    with open_source(path) as a, open_source(path, threads=1) as b:
+        for (_, fa), (_, fb) in zip(a, b, strict=True):
+            np.testing.assert_array_equal(fa, fb)
+    with pytest.raises(ValueError, match="threads"):
+        open_source(path, threads=0)

@@ -104,7 +104,15 @@ class BlobExtractor:
         else:
             np.copyto(out, mask)
         if self._close is not None:
-            cv2.morphologyEx(out, cv2.MORPH_CLOSE, self._close, dst=out)
+            # Only around the foreground: the closing of a mask that is empty outside its
+            # bounding rectangle B, computed on B widened by twice the kernel radius, equals
+            # the closing of the whole image (the dilation stays within one radius of B, and
+            # the erosion of the empty margin beyond it is empty).
+            x, y, w, h = cv2.boundingRect(out)
+            if w:
+                m = 2 * (self.close_size // 2) + 1
+                roi = out[max(y - m, 0) : y + h + m, max(x - m, 0) : x + w + m]
+                cv2.morphologyEx(roi, cv2.MORPH_CLOSE, self._close, dst=roi)
         return out
 
     def __call__(self, mask: NDArray[np.uint8], frame: int) -> Detections:

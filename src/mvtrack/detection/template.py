@@ -65,7 +65,12 @@ class _Template:
     __slots__ = ("mask", "mf", "n", "offset", "patch", "tick", "tz", "var_t")
 
     def __init__(
-        self, patch: Image, mask: Image | None, offset: tuple[float, float], tick: int
+        self,
+        patch: Image,
+        mask: Image | None,
+        offset: tuple[float, float],
+        tick: int,
+        mean: float | None = None,
     ) -> None:
         self.patch = patch
         self.mask = mask
@@ -73,10 +78,13 @@ class _Template:
         self.tick = tick
         if mask is not None:
             self.mf = (mask > 0).astype(np.float32)
-            t = patch.astype(np.float32)
-            self.tz = (t - float(t[mask > 0].mean())) * self.mf  # T − T̄ on the mask, 0 off it
-            self.var_t = float((self.tz * self.tz).sum())
-            self.n = float(self.mf.sum())
+            self.n = float(cv2.countNonZero(mask))
+            if mean is None:
+                mean = cv2.mean(patch, mask)[0]
+            self.tz = patch.astype(np.float32)
+            self.tz -= mean
+            self.tz *= self.mf  # T − T̄ on the mask, 0 off it
+            self.var_t = float(cv2.norm(self.tz, cv2.NORM_L2SQR))
 
 
 def masked_ncc(
@@ -217,40 +225,49 @@ class TemplateBank:
         self.clear()
 
     # ------------------------------------------------------------------ bookkeeping (arrays)
-    # Per track one row of ``_f`` (float64) and ``_i`` (int64), rows sorted by uid, so that a
-    # frame's update is a gather, a few column operations and a scatter whatever the number of
-    # tracks. Columns of ``_f``: the last full-size detected box (x, y, w, h), the reference
-    # box area (running maximum, decaying 1 % per detection), the first observed centre, the
-    # last observed centre (any detection, or a template match), and the distance of the last
-    # detection from the first. Columns of ``_i``: the tick of that box, detections observed.
-    _BOX, _AREA, _ORIGIN, _LAST, _TRAVEL = slice(0, 4), 4, slice(5, 7), slice(7, 9), 9
-    _TICK, _HITS = 0, 1
+    # One row of ``_f`` (float64) per track, rows sorted by uid (``_u``), so that a frame's
+    # update is a search, a gather, a few column operations and a scatter, whatever the number
+    # of tracks. Both end with a sentinel row (uid = int64 max), so a search never runs off
+    # the end. Columns: the last full-size detected box (x, y, w, h); the last observed centre
+    # (a detection or a template match); the reference box area (running maximum, decaying
+    # 1 % per detection); the first observed centre; the distance of the last detection from
+    # the first; the tick of the box (−1: none); the number of detections.
+    _BOX, _LAST, _AREA, _ORIGIN, _TRAVEL, _TICK, _HITS = (
+        slice(0, 4), slice(4, 6), 6, slice(7, 9), 9, 10, 11
+    )
+    _NCOL = 12
+    _SENTINEL = np.iinfo(np.int64).max
 
     def clear(self) -> None:
         """Forget everything."""
-        self.uids = np.zeros(0, np.int64)
-        self._f = np.zeros((0, 10))
-        self._i = np.zeros((0, 2), np.int64)
+        self._u = np.array([self._SENTINEL], np.int64)
+        self._f = self._empty_rows(1)
         self._templates: dict[int, _Template] = {}
         self._tick = -1
         self._frame: Image | None = None  # the frame of tick ``_tick``
         self._mask: Image | None = None  # a copy of its foreground mask, if given
         self._mask_buf: Image | None = None
 
+    def _empty_rows(self, n: int) -> FloatArray:
+        f = np.zeros((n, self._NCOL))
+        f[:, self._TICK] = -1.0
+        return f
+
+    @property
+    def uids(self) -> IntArray:
+        """(T,) int64: the tracks that have a recorded detection (sorted)."""
+        return self._u[:-1]
+
     def __len__(self) -> int:
-        return int(self.uids.size)
+        return int(self._u.size - 1)
 
     def __contains__(self, uid: object) -> bool:
         return isinstance(uid, (int, np.integer)) and bool(np.isin(uid, self.uids))
 
     def _rows(self, uids: IntArray) -> tuple[IntArray, BoolArray]:
-        """Row of each of ``uids`` in the sorted table (clipped) and whether it is there."""
-        n = self.uids.size
-        if n == 0:
-            return np.zeros(uids.size, np.int64), np.zeros(uids.size, bool)
-        pos = np.searchsorted(self.uids, uids)
-        np.minimum(pos, n - 1, out=pos)
-        return pos, self.uids[pos] == uids
+        """Row of each of ``uids`` (the sentinel's if absent) and whether it is there."""
+        pos = np.searchsorted(self._u, uids)
+        return pos, self._u[pos] == uids
 
     def observe(
         self,
@@ -293,6 +310,8 @@ class TemplateBank:
             s = np.sort(uids)
             if (s[1:] == s[:-1]).any():
                 raise ValueError("observe: uids must be distinct")
+        if (uids == self._SENTINEL).any():
+            raise ValueError(f"observe: uid {self._SENTINEL} is reserved")
         if mask is not None and mask.shape != frame.shape[:2]:
             raise ValueError(f"observe: mask is {mask.shape}, the frame {frame.shape[:2]}")
         self._record(frame, uids, xy, wh, mask)
@@ -304,26 +323,33 @@ class TemplateBank:
         pos, known = self._rows(uids)
         if not known.all():  # new tracks: insert empty rows (kept sorted), then as known ones
             new = ~known
-            nn = int(new.sum())
-            f = np.zeros((nn, 10))
+            f = self._empty_rows(int(new.sum()))
             f[:, self._ORIGIN] = xy[new]
-            i = np.zeros((nn, 2), np.int64)
-            i[:, self._TICK] = -1
-            allu = np.concatenate([self.uids, uids[new]])
-            order = np.argsort(allu, kind="stable")
-            self.uids = allu[order]
+            allu = np.concatenate([self._u, uids[new]])
+            order = np.argsort(allu, kind="stable")  # the sentinel stays last
+            self._u = allu[order]
             self._f = np.concatenate([self._f, f])[order]
-            self._i = np.concatenate([self._i, i])[order]
             pos, _ = self._rows(uids)
         f = self._f[pos]
         area = wh[:, 0] * wh[:, 1]
         full = area >= self.min_fill * f[:, self._AREA]
-        shrunk = ~full
-        if shrunk.any():
+        if full.all():  # the common case: every box is its track's new appearance
+            f[:, 0:6] = np.concatenate([xy, wh, xy], axis=1)  # box, last centre
+            f[:, self._TICK] = self._tick + 1
+        else:
             # a track whose detection just shrank keeps its last full appearance: cut it now
             # from the kept frame, before that frame is replaced (a loop over these few only)
-            for r in pos[shrunk & (self._i[pos, self._TICK] == self._tick)].tolist():
+            for r in pos[~full & (f[:, self._TICK] == self._tick)].tolist():
                 self._current(r)
+            f[full, 0:2] = xy[full]
+            f[full, 2:4] = wh[full]
+            f[:, self._LAST] = xy
+            f[full, self._TICK] = self._tick + 1
+        np.maximum(area, 0.99 * f[:, self._AREA], out=f[:, self._AREA])
+        d = xy - f[:, self._ORIGIN]
+        f[:, self._TRAVEL] = np.sqrt((d * d).sum(axis=1))
+        f[:, self._HITS] += 1.0
+        self._f[pos] = f
         self._tick += 1
         self._frame = frame
         if mask is None:
@@ -333,25 +359,15 @@ class TemplateBank:
                 self._mask_buf = np.empty(mask.shape, np.uint8)
             np.copyto(self._mask_buf, mask, casting="unsafe")
             self._mask = self._mask_buf
-        f[full, 0:2] = xy[full]
-        f[full, 2:4] = wh[full]
-        np.maximum(area, 0.99 * f[:, self._AREA], out=f[:, self._AREA])
-        f[:, self._LAST] = xy
-        d = xy - f[:, self._ORIGIN]
-        f[:, self._TRAVEL] = np.hypot(d[:, 0], d[:, 1])
-        self._f[pos] = f
-        self._i[pos[full], self._TICK] = self._tick
-        self._i[pos, self._HITS] += 1
 
-    def _eligible_rows(self, f: FloatArray, i: IntArray) -> BoolArray:
-        size = np.maximum(f[:, 2], f[:, 3])
-        need = np.maximum(self.min_travel * size, self.min_travel_px)
-        return (f[:, self._TRAVEL] >= need) & (i[:, self._HITS] >= self.min_hits)
+    def _eligible_rows(self, f: FloatArray) -> BoolArray:
+        need = np.maximum(self.min_travel * f[:, 2:4].max(axis=1), self.min_travel_px)
+        return (f[:, self._TRAVEL] >= need) & (f[:, self._HITS] >= self.min_hits)
 
     @property
     def eligible(self) -> BoolArray:
         """Per track in :attr:`uids`: far enough from its first detection, often enough seen."""
-        return self._eligible_rows(self._f, self._i)
+        return self._eligible_rows(self._f[:-1])
 
     def retain(self, uids: ArrayLike) -> None:
         """Keep only the tracks in ``uids`` (the live ones); forget deleted tracks."""
@@ -368,9 +384,9 @@ class TemplateBank:
     def _keep(self, keep: BoolArray) -> None:
         for u in self.uids[~keep].tolist():
             self._templates.pop(u, None)
-        self.uids = self.uids[keep]
+        keep = np.append(keep, True)  # the sentinel
+        self._u = self._u[keep]
         self._f = self._f[keep]
-        self._i = self._i[keep]
 
     # ------------------------------------------------------------------------- templates
     def _cut(self, i: int) -> _Template | None:
@@ -387,21 +403,17 @@ class TemplateBank:
         y1 = min(top + max(round(h), 1), height)
         if x1 - x0 < self.min_size or y1 - y0 < self.min_size:
             return None
-        patch = _grey(frame[y0:y1, x0:x1])
+        patch = np.ascontiguousarray(_grey(frame[y0:y1, x0:x1]))
         mask = None
         if self._mask is not None:
-            on = self._mask[y0:y1, x0:x1] > 0
-            if int(on.sum()) < self.min_pixels:
+            mask = cv2.compare(self._mask[y0:y1, x0:x1], 0, cv2.CMP_GT)  # 255 on the object
+            if cv2.countNonZero(mask) < self.min_pixels:
                 return None
-            spread = float(patch[on].std())
-            mask = on.astype(np.uint8) * 255
-        else:
-            spread = float(patch.std())
+        mean, spread = (v[0, 0] for v in cv2.meanStdDev(patch, mask=mask))
         if spread < self.min_std:
             return None
-        return _Template(
-            np.ascontiguousarray(patch), mask, (x - x0, y - y0), int(self._i[i, self._TICK])
-        )
+        tick = int(self._f[i, self._TICK])
+        return _Template(patch, mask, (x - x0, y - y0), tick, float(mean))
 
     def template(self, uid: int) -> Image | None:
         """The grey patch held for ``uid`` (cut now if it is due), or ``None``."""
@@ -414,7 +426,7 @@ class TemplateBank:
     def _current(self, i: int) -> _Template | None:
         uid = int(self.uids[i])
         t = self._templates.get(uid)
-        tick = int(self._i[i, self._TICK])
+        tick = int(self._f[i, self._TICK])
         due = t is None or t.tick < tick
         if due and tick == self._tick:  # last detected in the kept frame
             t = self._cut(i)
@@ -483,19 +495,27 @@ class TemplateBank:
         found = np.zeros(k, bool)
         out = np.full((k, 2), np.nan)
         score = np.full(k, np.nan)
-        if k == 0 or self.uids.size == 0:
-            return found, out, score
-        pos, has = self._rows(uids)
-        f = self._f[pos]
-        has &= self._eligible_rows(f, self._i[pos])  # tracks that have driven somewhere
-        if self.max_drift is not None:  # ... and have come to rest where last seen
-            d = pxy - f[:, self._LAST]
-            has &= np.hypot(d[:, 0], d[:, 1]) <= self.max_drift  # False for a NaN prediction
-        else:
-            has &= np.isfinite(pxy).all(axis=1)
-        if not has.any():
+        if k == 0 or self._u.size == 1:
             return found, out, score
         height, width = frame.shape[:2]
+        pos, has = self._rows(uids)
+        f = self._f[pos]
+        has &= self._eligible_rows(f)  # tracks that have driven somewhere
+        if self.max_drift is not None:  # ... and have come to rest where last seen
+            d = pxy - f[:, self._LAST]
+            has &= (d * d).sum(axis=1) <= self.max_drift**2  # False for a NaN prediction
+        else:
+            has &= np.isfinite(pxy).all(axis=1)
+        # a box placed on the prediction that sticks out of the image: leaving, not stopped.
+        # The exact test (on the template) is in the loop; this bound of it, one row of array
+        # operations, spares the loop and the cutting of a template for leaving tracks.
+        half = (f[:, 2:4] - 1.0) / 2.0
+        shift = pxy - f[:, 0:2]
+        first = shift + np.maximum(f[:, 0:2] - half, 0.0)  # ≈ top-left of the placement
+        last = shift + np.minimum(f[:, 0:2] + half, (width, height))  # ≈ its end
+        has &= (first >= -1.0).all(axis=1) & (last <= (width + 0.5, height + 0.5)).all(axis=1)
+        if not has.any():
+            return found, out, score
         ri = math.floor(r)
         r2 = r * r
         p_list = pxy.tolist()
