@@ -405,10 +405,10 @@ class StoppedVehicleRescuer:
 
     def callback(self, image: Image, dets: Detections) -> RescueFn:
         """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for this frame."""
-        search = self.inner.callback(image)
         tab = self.tracker.tracks
 
         def rescue(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any]:
+            search = self.inner.callback(image)  # only on frames with missed tracks
             uids = np.asarray(uids, np.int64).reshape(-1)
             # a stopped vehicle stands where it was last measured: search around that place,
             # not around the prediction, which keeps drifting with the last velocity estimate

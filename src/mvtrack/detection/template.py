@@ -114,11 +114,14 @@ def masked_ncc(
     """
     if n is None:
         n = float(mf.sum())
-    w = window.astype(np.float32)
-    w -= cv2.mean(window)[0]  # smaller sums, less float32 cancellation below
+    h = window.shape[0]
+    both = np.empty((2 * h, window.shape[1]), np.float32)  # [I ; I²], one correlation for both
+    w = both[:h]
+    np.subtract(window, cv2.mean(window)[0], out=w, casting="unsafe")  # smaller sums below
+    np.multiply(w, w, out=both[h:])
     num = cv2.matchTemplate(w, tz, cv2.TM_CCORR)  # Σ_M (T − T̄) I_u
-    s1 = cv2.matchTemplate(w, mf, cv2.TM_CCORR)  # Σ_M I_u
-    var_i = cv2.matchTemplate(w * w, mf, cv2.TM_CCORR)  # Σ_M I_u²
+    sums = cv2.matchTemplate(both, mf, cv2.TM_CCORR)  # rows straddling the seam are unused
+    s1, var_i = sums[: h - mf.shape[0] + 1], sums[h:]  # Σ_M I_u, Σ_M I_u²
     var_i -= s1 * s1 * (1.0 / n)  # Σ_M (I_u − Ī_u)²
     flat = var_i <= 1e-6 * n
     np.maximum(var_i, 1e-6 * n, out=var_i)
