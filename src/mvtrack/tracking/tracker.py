@@ -488,9 +488,11 @@ class Tracker:
         neighbour on the squared distance)."""
         cand = (det_index < 0).nonzero()[0]
         g = self._gate2
-        ti, dj, cost = fast_assoc.gate_pairs(
-            gxy[cand], dets.xy[ud], None if f2 is None else f2[cand], g
-        )
+        scale = None if f2 is None else f2[cand]
+        if cand.size * ud.size <= fast_assoc.DENSE_LSA:  # the same result, one dense solve
+            mt, md = fast_assoc.dense_optimal(gxy[cand], dets.xy[ud], scale, g)
+            return cand[mt], ud[md]
+        ti, dj, cost = fast_assoc.gate_pairs(gxy[cand], dets.xy[ud], scale, g)
         if ti.size == 0:
             return _EMPTY, _EMPTY
         mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, g)
