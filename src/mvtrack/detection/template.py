@@ -103,9 +103,10 @@ def masked_ncc(
         \quad \sum_M (T - \bar T)(I_u - \bar I_u) = \sum_M (T - \bar T) I_u,
         \quad \sum_M (I_u - \bar I_u)^2 = \sum_M I_u^2 - \tfrac{1}{n}\big(\sum_M I_u\big)^2,
 
-    with means over the ``n`` mask pixels: three plain correlations (``cv2.TM_CCORR``), the
-    same values as ``cv2.matchTemplate(..., TM_CCOEFF_NORMED, mask=M)`` (to ~1e-5) at a third
-    to two thirds of its cost. ``tz`` is :math:`(T - \bar T)` on the mask and 0 off it, ``mf``
+    with means over the ``n`` mask pixels: three plain correlations (``cv2.TM_CCORR``; the
+    two with the mask in one call, over the window stacked on its square), the same values as
+    ``cv2.matchTemplate(..., TM_CCOEFF_NORMED, mask=M)`` (to ~1e-5) at a third to two thirds
+    of its cost. ``tz`` is :math:`(T - \bar T)` on the mask and 0 off it, ``mf``
     the mask as 0/1 floats, ``var_t`` :math:`\sum_M (T - \bar T)^2`, ``n`` the number of mask
     pixels (counted if not given). Flat placements give NaN.
 
