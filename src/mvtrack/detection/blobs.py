@@ -177,17 +177,16 @@ def blobs_from_mask(
         _, _, stats, cents = cv2.connectedComponentsWithStatsWithAlgorithm(
             roi, connectivity, cv2.CV_32S, algo
         )
-    stats = stats[1:]  # row 0 is the background
-    area = stats[:, cv2.CC_STAT_AREA].astype(np.float64)
+    # columns left, top, width, height, area (CC_STAT_*); row 0 is the background
+    st = stats[1:].astype(np.float64)
+    area = st[:, cv2.CC_STAT_AREA]
     keep = area >= min_area
     if max_area is not None:
         keep &= area <= max_area
-    stats = stats[keep]
-    origin = np.array([x0, y0], np.float64)
-    wh = stats[:, [cv2.CC_STAT_WIDTH, cv2.CC_STAT_HEIGHT]].astype(np.float64)
+    st = st[keep]
     if center == "centroid":
-        xy = cents[1:][keep] + origin
+        xy = cents[1:][keep] + (x0, y0)
     else:
         # box centre with pixel centres on integers: l + (w − 1)/2
-        xy = stats[:, [cv2.CC_STAT_LEFT, cv2.CC_STAT_TOP]] + origin + (wh - 1.0) / 2.0
-    return Detections(frame, xy.reshape(-1, 2), wh.reshape(-1, 2), None, area[keep])
+        xy = st[:, 0:2] + (x0, y0) + (st[:, 2:4] - 1.0) / 2.0
+    return Detections(frame, xy, st[:, 2:4], None, st[:, cv2.CC_STAT_AREA])

@@ -663,7 +663,9 @@ class TemplateRescuer:
         if self.tracker is None:
             raise ValueError("TemplateRescuer: attach a tracker before observing frames")
         det = tracks.det_index
-        rows = (det >= 0) & (tracks.track_id > 0)
+        rows = det >= 0
+        if getattr(getattr(self.tracker, "config", None), "output_tentative", True):
+            rows &= tracks.track_id > 0  # tentative rows (ID −1) are output too
         row_uids = getattr(self.tracker, "row_uids", None)
         if row_uids is not None and len(row_uids) == len(det):
             uids = row_uids[rows]
