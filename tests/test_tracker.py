@@ -298,6 +298,7 @@ def test_paper1_nearest_is_non_exclusive() -> None:
         {"predictor": ""}, {"predictor_params": [1, 2]}, {"distance": "iou", "gate": 100.0},
         {"recover_speed": 0.0}, {"second_gate": -2.0}, {"recover_window": 0.0},
         {"size_ref": 0.0}, {"coast_output": -0.1}, {"coast_output": float("inf")},
+        {"size_weight": 1.0}, {"size_weight": -0.1},
     ],
 )
 def test_bad_config_values_raise_value_error(changes: dict) -> None:
@@ -374,3 +375,21 @@ def test_measurement_noise_scales_with_the_box_area_factor() -> None:
         a, b = scaled.step(d), plain.step(d)
     np.testing.assert_allclose(scaled.pstate.P, plain.pstate.P, rtol=1e-12)
     np.testing.assert_allclose(a.filtered_xy, b.filtered_xy, rtol=1e-12)
+
+
+@pytest.mark.parametrize("weight, small_takes", [(0.0, 0), (0.5, 1)])
+def test_size_term_gives_the_small_box_to_the_small_track(weight, small_takes) -> None:
+    # a small (20 px) and a large (44 px) box stand 8 px apart; then two detections appear
+    # between them: by position alone the small track's nearest is the large box (16 vs
+    # 20.25 px²), with the size term it is the small one
+    still = [
+        Detections(k, [[100.0, 100.0], [108.0, 100.0]], [[20.0, 20.0], [44.0, 44.0]])
+        for k in range(5)
+    ]
+    last = Detections(5, [[104.0, 100.0], [104.5, 100.0]], [[44.0, 44.0], [20.0, 20.0]])
+    config = TrackerConfig(size_weight=weight, second_gate=None, recover_speed=None)
+    log = track_detections([*still, last], config)
+    out = log[5]
+    by_id = dict(zip(out.track_id.tolist(), out.det_index.tolist(), strict=True))
+    assert sorted(by_id) == [1, 2]  # track 1 is the small box (born first: lower x)
+    assert by_id[1] == small_takes and by_id[2] == 1 - small_takes

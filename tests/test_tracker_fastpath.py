@@ -135,18 +135,21 @@ def test_optimal_is_invariant_to_permuting_detections() -> None:
     )
 
 
-@pytest.mark.parametrize("stretch", [False, True])
-def test_dense_two_stage_equals_two_sparse_stages(stretch: bool) -> None:
+@pytest.mark.parametrize("stretch, sized", [(False, False), (True, False), (True, True)])
+def test_dense_two_stage_equals_two_sparse_stages(stretch: bool, sized: bool) -> None:
     rng = np.random.default_rng(4)
     for _ in range(20):
         txy, dxy = _scene(rng, 30, 33, 120.0)
         f2 = rng.uniform(1.0, 6.0, (30, 2)) if stretch else None  # per-axis box factors²
-        mt, md, ud = fa.dense_two_stage(txy, dxy, f2, 25.0, 144.0, f2)
-        t1, d1 = fa.optimal(*fa.gate_pairs(txy, dxy, f2, 25.0), 30, 33, 25.0)
+        twh, dwh = rng.uniform(10, 60, (30, 2)), rng.uniform(10, 60, (33, 2))
+        size = (twh, dwh, 0.5) if sized else None
+        mt, md, ud = fa.dense_two_stage(txy, dxy, f2, 25.0, 144.0, f2, size)
+        t1, d1 = fa.optimal(*fa.gate_pairs(txy, dxy, f2, 25.0, size), 30, 33, 25.0)
         lt = np.setdiff1d(np.arange(30), t1)
         ld = np.setdiff1d(np.arange(33), d1)
+        size2 = (twh[lt], dwh[ld], 0.5) if sized else None
         t2, d2 = fa.optimal(
-            *fa.gate_pairs(txy[lt], dxy[ld], None if f2 is None else f2[lt], 144.0),
+            *fa.gate_pairs(txy[lt], dxy[ld], None if f2 is None else f2[lt], 144.0, size2),
             lt.size, ld.size, 144.0,
         )
         want = set(zip(t1.tolist(), d1.tolist(), strict=True)) | set(
@@ -192,3 +195,20 @@ def test_fast_cv_with_per_track_r_equals_kalman_cv_with_each_r() -> None:
             np.testing.assert_allclose(fast.velocity(a)[i], p.velocity(s)[0], atol=1e-9)
             np.testing.assert_allclose(fast.position_cov(a)[i], p.position_cov(s)[0],
                                        rtol=1e-9)
+
+
+@pytest.mark.parametrize("n, m", [(6, 7), (100, 97), (900, 880)])
+def test_gate_pairs_size_term_is_the_capped_weighted_size_difference(n, m) -> None:
+    rng = np.random.default_rng(n)
+    txy, dxy = _scene(rng, n, m, 12.0 * np.sqrt(n))
+    f2 = rng.uniform(1.0, 4.0, (n, 2))
+    twh, dwh = rng.uniform(10, 60, (n, 2)), rng.uniform(10, 60, (m, 2))
+    ti, dj, plain = fa.gate_pairs(txy, dxy, f2, 100.0)
+    si, sj, sized = fa.gate_pairs(txy, dxy, f2, 100.0, (twh, dwh, 0.3))
+    np.testing.assert_array_equal(ti, si)  # the gate is on the position only
+    np.testing.assert_array_equal(dj, sj)
+    assert ti.size > 0
+    d = dwh[dj] - twh[ti]
+    s = d[:, 0] ** 2 / f2[ti, 0] + d[:, 1] ** 2 / f2[ti, 1]
+    np.testing.assert_allclose(sized, plain + 0.3 * np.minimum(s, 100.0))
+    assert (sized < 200.0).all()  # below leaving both unmatched (u = 2 gate)

@@ -52,6 +52,10 @@ DENSE_LSA = 2_500
 DENSE_CONFLICT = 10_000
 
 _EMPTY = np.zeros(0, dtype=np.intp)
+
+#: the box-size term of the cost: ``(track wh (N, 2), detection wh (M, 2), weight)``
+SizeTerm = tuple[FloatArray, FloatArray, float]
+
 #: the 3 × 3 block of grid cells around a cell
 _NEIGHBOURS = np.array([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=np.int64)
 
@@ -70,8 +74,21 @@ def _cost(dx: FloatArray, dy: FloatArray, scale: FloatArray | None) -> FloatArra
     return dx * dx / scale[:, 0][extra] + dy * dy / scale[:, 1][extra]
 
 
+def _size_matrix(size: SizeTerm, scale: FloatArray | None) -> FloatArray:
+    """Unweighted size term ``Δwᵀ diag(scale)⁻¹ Δw`` of every track × detection pair."""
+    twh, dwh, _ = size
+    return _cost(dwh[:, 0] - twh[:, 0, None], dwh[:, 1] - twh[:, 1, None], scale)
+
+
+def _add_size(cost: FloatArray, s: FloatArray, weight: float, cap: float) -> FloatArray:
+    """``cost + weight · min(s, cap)``: with ``weight < 1`` and ``cap`` the gate, a gated pair
+    still costs less than ``2 gate`` (leaving its track and detection unmatched)."""
+    return cost + weight * np.minimum(s, cap)
+
+
 def gate_pairs(
-    txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float
+    txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float,
+    size: SizeTerm | None = None,
 ) -> tuple[IntArray, IntArray, FloatArray]:
     """Gated pairs ``(ti, dj, cost)`` with ``cost = Δᵀ S_i⁻¹ Δ <= gate``, ``Δ = z_j − x̄_i``.
 
@@ -80,6 +97,10 @@ def gate_pairs(
     ``s_i`` (N,) for the Mahalanobis distance with ``S_i = s_i I`` (cost χ²-distributed with
     2 degrees of freedom, the values of ``mahalanobis`` there), or per-axis factors ``(N, 2)``
     (``S_i = diag(s_i)``: the tracker's Euclidean gate stretched with the box size).
+
+    ``size = (track wh, detection wh, weight)`` adds ``weight · min(Δwᵀ S_i⁻¹ Δw, gate)``
+    (``Δw`` the difference of the box sizes, ``S_i`` as above: ``None`` or per-axis) to the
+    cost of every gated pair; the gate itself stays on the position.
     """
     n, m = txy.shape[0], dxy.shape[0]
     if n == 0 or m == 0:
@@ -87,7 +108,7 @@ def gate_pairs(
     if n * m <= DENSE_GATE:
         cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
         ti, dj = np.nonzero(cost <= gate)
-        return ti, dj, cost[ti, dj]
+        return ti, dj, _pair_size(ti, dj, cost[ti, dj], scale, gate, size)
     if scale is None:
         radius = np.full(n, np.sqrt(gate))
     else:
@@ -100,7 +121,21 @@ def gate_pairs(
     d = dxy[dj] - txy[ti]
     cost = _cost(d[:, 0], d[:, 1], None if scale is None else scale[ti])
     keep = cost <= gate
-    return ti[keep], dj[keep], cost[keep]
+    ti, dj = ti[keep], dj[keep]
+    return ti, dj, _pair_size(ti, dj, cost[keep], scale, gate, size)
+
+
+def _pair_size(
+    ti: IntArray, dj: IntArray, cost: FloatArray, scale: FloatArray | None, gate: float,
+    size: SizeTerm | None,
+) -> FloatArray:
+    """``cost`` of the pairs plus their size term (:func:`gate_pairs`)."""
+    if size is None or ti.size == 0:
+        return cost
+    twh, dwh, weight = size
+    d = dwh[dj] - twh[ti]
+    s = _cost(d[:, 0], d[:, 1], None if scale is None else scale[ti])
+    return _add_size(cost, s, weight, gate)
 
 
 def band_pairs(txy: FloatArray, dxy: FloatArray, rx: FloatArray) -> tuple[IntArray, IntArray]:
@@ -176,19 +211,22 @@ def spatial_pairs(
 
 
 def dense_optimal(
-    txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float
+    txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float,
+    size: SizeTerm | None = None,
 ) -> tuple[IntArray, IntArray]:
     """Gate and solve a small problem in one dense ``linear_sum_assignment``.
 
     Same result as :func:`gate_pairs` followed by :func:`optimal` with ``half_u = gate``: a
     forbidden cell costs ``u = 2 gate``, i.e. leaving both its track and its detection
     unmatched, which makes the rectangular problem equivalent to the penalised one (up to a
-    constant). Returns matched (track, detection) rows.
+    constant). ``size`` as in :func:`gate_pairs`. Returns matched (track, detection) rows.
     """
     cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
     out = ~(cost <= gate)  # NaN never passes
     if np.count_nonzero(out) == out.size:
         return _EMPTY, _EMPTY
+    if size is not None:
+        cost = _add_size(cost, _size_matrix(size, scale), size[2], gate)
     u = 2.0 * gate
     cost[out] = u
     rows, cols = linear_sum_assignment(cost)
@@ -198,14 +236,15 @@ def dense_optimal(
 
 def dense_two_stage(
     txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float, gate2: float,
-    scale2: FloatArray | None = None,
+    scale2: FloatArray | None = None, size: SizeTerm | None = None,
 ) -> tuple[IntArray, IntArray, IntArray]:
     """:func:`dense_optimal`, then a second stage on what is left.
 
     The tracks and detections left unmatched by the first stage are assigned again with the
     Euclidean gate ``gate2`` (px²) on the squared distance (with ``scale2`` (N,) or (N, 2)
     when given, as ``scale`` of :func:`gate_pairs`: the tracker's box-size factors), from the
-    same differences.
+    same differences. ``size`` as in :func:`gate_pairs` (normalised by ``scale2``, capped at
+    each stage's gate; only with the Euclidean ``scale``, i.e. ``scale is scale2``).
     Returns all matched (track, detection) rows, first stage first, and the unassigned
     detection rows.
     """
@@ -214,8 +253,13 @@ def dense_two_stage(
     cost = _cost(dx, dy, scale)  # eq. (8) of paper 2, squared (over S)
     plain = scale is None and scale2 is None
     d2 = cost.copy() if plain else None  # the second stage's costs
+    out = ~(cost <= gate)  # NaN never passes
+    s = None
+    if size is not None:
+        s = _size_matrix(size, scale2)
+        cost = _add_size(cost, s, size[2], gate)
     u = 2.0 * gate
-    cost[~(cost <= gate)] = u  # NaN never passes
+    cost[out] = u
     rows, cols = linear_sum_assignment(cost)
     keep = cost[rows, cols] < u
     rows, cols = rows[keep], cols[keep]
@@ -237,6 +281,8 @@ def dense_two_stage(
     ok = sub <= gate2
     if not np.count_nonzero(ok):
         return rows, cols, ld
+    if s is not None:
+        sub = _add_size(sub, s[lt[:, None], ld], size[2], gate2)
     u2 = 2.0 * gate2
     sub[~ok] = u2
     r2, c2 = linear_sum_assignment(sub)

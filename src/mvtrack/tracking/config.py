@@ -128,6 +128,15 @@ class TrackerConfig:
         ``init_velocity_std``, ``recover_speed``) are not scaled. The noise is scaled only with
         the closed-form ``kalman-cv``, the gates only for ``euclidean`` (and ``mahalanobis``
         through the scaled noise). ``None`` disables the scaling.
+    size_weight : float
+        In [0, 1). With the ``euclidean`` distance, the assignment cost of a gated pair is
+        ``Δxᵀ F⁻² Δx + size_weight · min(Δwᵀ F⁻² Δw, gate)``: the squared position
+        difference plus the weighted squared difference of the box sizes (``Δw`` = detection
+        w, h − the track's smoothed w, h; ``F = diag(f_x, f_y)`` the size factors of
+        ``size_ref``), capped at the gate. The gate itself stays on the position; the size
+        term only ranks competing pairs, as the box overlap does for IoU association (two
+        people side by side at different depths differ in height). Below 1, a gated pair
+        always costs less than leaving its track and detection unmatched. 0 disables it.
     coast_output : float or None
         Seconds. Rows of a coasting track are output only for its first ``coast_output``
         seconds without a detection; it stays alive (and can be associated again) for
@@ -161,6 +170,7 @@ class TrackerConfig:
     size_smoothing: float = 0.5
     size_ref: float | None = 50.0
     coast_output: float | None = 0.08
+    size_weight: float = 0.5
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -187,6 +197,9 @@ class TrackerConfig:
             and self.coast_output >= 0
         ):
             raise bad("coast_output", "must be a finite number of seconds >= 0 or None")
+        w = self.size_weight
+        if not isinstance(w, (int, float)) or not (0.0 <= w < 1.0):
+            raise bad("size_weight", "must be a number in [0, 1)")
         for name in ("max_coast", "tentative_max_coast"):
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
@@ -258,6 +271,7 @@ def _round(x: float) -> int:
 _PAPER_COMMON: dict[str, Any] = {
     "size_ref": None,
     "coast_output": None,
+    "size_weight": 0.0,
     "measurement_std": 2.0,
     "init_velocity_std": None,
     "accel_std": None,

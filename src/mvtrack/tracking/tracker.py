@@ -270,6 +270,8 @@ class Tracker:
         self._ref = None if ref is None else float(ref)
         self._inv_ref2 = None if ref is None else 1.0 / float(ref) ** 2
         self._scale_r = self._inv_ref2 is not None and isinstance(self.predictor, FastCVPredictor)
+        # box-size term of the Euclidean costs (in the units of the position cost)
+        self._size_w = float(self.config.size_weight) if self._fast_gate == "euclidean" else 0.0
         self._birth_row = np.array([0, -1, TENTATIVE, 1, 0, 1, 0, 0], dtype=np.int64)
         self.reset()
 
@@ -335,14 +337,16 @@ class Tracker:
             if m == 0:
                 mt = md = ud = _EMPTY
             elif self._fast_gate is not None:
-                mt, md, ud, staged = self._associate_fast(ps, gxy, dets, f2, r_rows)
+                mt, md, ud, staged = self._associate_fast(
+                    ps, gxy, dets, f2, r_rows, tab.floats[:, WH]
+                )
             else:
                 mt, md, ud = self._associate(ps, gxy, tab, dets)
             det_index = np.empty(n, dtype=np.int64)
             det_index.fill(-1)
             det_index[mt] = md
             if self._gate2 is not None and not staged and ud.size and mt.size < n:
-                mt2, md2 = self._second_stage(gxy, det_index, dets, ud, f2)
+                mt2, md2 = self._second_stage(gxy, det_index, dets, ud, f2, tab.floats[:, WH])
                 if mt2.size:
                     det_index[mt2] = md2
                     mt, md = np.concatenate([mt, mt2]), np.concatenate([md, md2])
@@ -446,14 +450,16 @@ class Tracker:
 
     def _associate_fast(
         self, ps: Any, gxy: FloatArray, dets: Detections, f2: FloatArray | None,
-        r_rows: FloatArray | None,
+        r_rows: FloatArray | None, twh: FloatArray,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], bool]:
         """Gate and assign through :mod:`mvtrack.tracking.associate` (disc-shaped gates);
         the flag says whether the second stage was done too. ``f2`` (N, 2) stretches the
         Euclidean gates per axis (``Δx²/f_x² + Δy²/f_y² <= gate``), ``r_rows`` (N,) are the
-        tracks' measurement variances."""
+        tracks' measurement variances, ``twh`` (N, 2) their box sizes (for the size term of
+        the Euclidean cost, ``config.size_weight``)."""
         n, m = gxy.shape[0], len(dets)
         scale = f2
+        size = (twh, dets.wh, self._size_w) if self._size_w else None
         if self._fast_gate == "mahalanobis":
             r = self.predictor.r if r_rows is None else r_rows
             scale = self.predictor.position_var(ps) + r  # S = (P̄ + r) I
@@ -462,16 +468,16 @@ class Tracker:
         if rule == "optimal" and not self._assign_params and n * m <= fast_assoc.DENSE_LSA:
             if self._gate2 is not None:  # both stages from one distance matrix
                 mt, md, ud = fast_assoc.dense_two_stage(
-                    gxy, dets.xy, scale, self._gate, self._gate2, f2
+                    gxy, dets.xy, scale, self._gate, self._gate2, f2, size
                 )
                 return mt, md, ud, True
             else:
-                mt, md = fast_assoc.dense_optimal(gxy, dets.xy, scale, self._gate)
+                mt, md = fast_assoc.dense_optimal(gxy, dets.xy, scale, self._gate, size)
         elif rule == "optimal" and not self._assign_params:
-            ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate)
+            ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate, size)
             mt, md = fast_assoc.optimal(ti, dj, cost, n, m, self._gate)
         else:
-            ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate)
+            ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate, size)
             a = assign_pairs(ti, dj, cost, n, m, rule, **self._assign_params)
             mt, md = a.track, a.det
         used = np.zeros(m, dtype=bool)
@@ -480,7 +486,7 @@ class Tracker:
 
     def _second_stage(
         self, gxy: FloatArray, det_index: IntArray, dets: Detections, ud: NDArray[np.intp],
-        f2: FloatArray | None,
+        f2: FloatArray | None, twh: FloatArray,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         """Second association stage: the tracks left unmatched by the first stage against the
         detections left unassigned, with the wider Euclidean gate ``second_gate`` (px, stretched
@@ -489,10 +495,11 @@ class Tracker:
         cand = (det_index < 0).nonzero()[0]
         g = self._gate2
         scale = None if f2 is None else f2[cand]
+        size = (twh[cand], dets.wh[ud], self._size_w) if self._size_w else None
         if cand.size * ud.size <= fast_assoc.DENSE_LSA:  # the same result, one dense solve
-            mt, md = fast_assoc.dense_optimal(gxy[cand], dets.xy[ud], scale, g)
+            mt, md = fast_assoc.dense_optimal(gxy[cand], dets.xy[ud], scale, g, size)
             return cand[mt], ud[md]
-        ti, dj, cost = fast_assoc.gate_pairs(gxy[cand], dets.xy[ud], scale, g)
+        ti, dj, cost = fast_assoc.gate_pairs(gxy[cand], dets.xy[ud], scale, g, size)
         if ti.size == 0:
             return _EMPTY, _EMPTY
         mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, g)
