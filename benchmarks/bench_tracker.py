@@ -180,8 +180,9 @@ def variants() -> list[tuple[str, TrackerConfig]]:
     return [
         ("default", TrackerConfig()),
         ("every coasting row output (coast_output = None)", TrackerConfig(coast_output=None)),
-        ("previous default (σ_z 2 px, every coasting row, no size scaling)",
-         TrackerConfig(measurement_std=2.0, coast_output=None, size_ref=None)),
+        ("no box-size term in the cost (size_weight = 0)", TrackerConfig(size_weight=0.0)),
+        ("previous default (σ_z 2 px, every coasting row, no size scaling or term)",
+         TrackerConfig(measurement_std=2.0, coast_output=None, size_ref=None, size_weight=0.0)),
         ("no second stage (10 px only)", TrackerConfig(second_gate=None)),
         ("one stage, 20 px", TrackerConfig(gate=400.0, second_gate=None)),
         ("no recovery stage", TrackerConfig(recover_speed=None)),
