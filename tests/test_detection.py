@@ -318,3 +318,28 @@ def test_closing_around_the_foreground_equals_closing_the_whole_mask(close_size:
         ours = BlobExtractor(open_size=3, close_size=close_size).clean(m)
         ref = cv2.morphologyEx(cv2.morphologyEx(m, cv2.MORPH_OPEN, rect), cv2.MORPH_CLOSE, ellipse)
         np.testing.assert_array_equal(ours, ref)
+
+
+def test_blobs_labelled_band_by_band_equal_those_of_the_whole_mask() -> None:
+    """Rows without foreground split the mask into bands labelled one by one; the blobs
+    (centroid, box, area) must be those of labelling the whole mask."""
+    from mvtrack.detection.blobs import blobs_from_mask
+
+    rng = np.random.default_rng(5)
+    for trial in range(40):
+        m = np.zeros((90, 120), np.uint8)
+        for _ in range(rng.integers(1, 9)):  # blobs in a few separate bands, some sharing rows
+            y, x = rng.integers(0, 85), rng.integers(0, 110)
+            m[y : y + rng.integers(1, 6), x : x + rng.integers(1, 12)] = 255
+        if trial % 2:
+            m[rng.random(m.shape) < 0.01] = 255
+        n, _, stats, cents = cv2.connectedComponentsWithStats(m, connectivity=8)
+        ref = np.concatenate([cents[1:], stats[1:, [2, 3, 4]]], axis=1)
+        for center in ("centroid", "box"):
+            dets = blobs_from_mask(m, 0, min_area=1, center=center)
+            assert len(dets) == n - 1
+        dets = blobs_from_mask(m, 0, min_area=1)
+        ours = np.concatenate([dets.xy, dets.wh, dets.area[:, None]], axis=1)
+        np.testing.assert_allclose(ours[np.lexsort(ours.T[::-1])], ref[np.lexsort(ref.T[::-1])])
+        kept = blobs_from_mask(m, 0, min_area=4, max_area=20)
+        assert len(kept) == int(((stats[1:, 4] >= 4) & (stats[1:, 4] <= 20)).sum())

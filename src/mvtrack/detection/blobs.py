@@ -159,17 +159,65 @@ def blobs_from_mask(
 
     Notes
     -----
-    Labelling is the costly step, so it runs only on the bounding rectangle of the foreground
-    (``cv2.boundingRect``, one fast scan) with the block-based BBDT algorithm for
-    8-connectivity, which is the fastest of OpenCV's labellers here, and with 16-bit labels
-    (about 30 % faster than 32-bit ones; 32-bit only for a mask of more than 65535 blobs).
+    Labelling is the costly step, so it runs only where there is foreground: rows without
+    foreground split the mask into horizontal bands (a blob never spans an empty row), and
+    each band's bounding rectangle is labelled on its own when these rectangles cover
+    clearly less than the bounding rectangle of all the foreground (on X5 at 320×240 they
+    cover about half of it), else that one rectangle is. The labeller is the block-based BBDT
+    algorithm for 8-connectivity, the fastest of OpenCV's here, with 16-bit labels (about 30 %
+    faster than 32-bit ones; 32-bit only for more than 65535 blobs).
     """
-    x0, y0, w, h = cv2.boundingRect(mask)
-    if w == 0 or h == 0:
+    rows = cv2.reduce(mask, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel() > 0
+    edges = np.flatnonzero(np.diff(rows.view(np.int8), prepend=0, append=0))
+    if edges.size == 0:
         return Detections.empty(frame)
+    bands = []  # (left, top, width, height) of each band's foreground
+    for r0, r1 in edges.reshape(-1, 2).tolist():  # a loop over the few bands, not over blobs
+        x, _, w, _ = cv2.boundingRect(mask[r0:r1])
+        bands.append((x, r0, w, r1 - r0))
+    if len(bands) > 1:
+        b = np.array(bands)
+        left, right = int(b[:, 0].min()), int((b[:, 0] + b[:, 2]).max())
+        whole = (left, int(edges[0]), right - left, int(edges[-1] - edges[0]))
+        if int((b[:, 2] * b[:, 3]).sum()) > 0.6 * whole[2] * whole[3]:
+            bands = [whole]  # the bands would save little: one call
+    stats, cents = [], []
+    for x0, y0, w, h in bands:
+        st, ce = _label(mask[y0 : y0 + h, x0 : x0 + w], connectivity)
+        stats.append(st[1:])  # row 0 is the background
+        cents.append(ce[1:])
+    if len(bands) == 1:
+        st, ce = stats[0].astype(np.float64), cents[0]
+        origin = np.array(bands[0][:2], np.float64)
+    else:
+        st, ce = np.concatenate(stats).astype(np.float64), np.concatenate(cents)
+        counts = [len(c) for c in cents]
+        origin = np.repeat(np.array(bands, np.float64)[:, :2], counts, axis=0)
+    # st: left, top, width, height, area (CC_STAT_*) inside the labelled rectangle
+    area = st[:, cv2.CC_STAT_AREA]
+    keep = area >= min_area
+    if max_area is not None:
+        keep &= area <= max_area
+    if not keep.all():
+        st, ce = st[keep], ce[keep]
+        if origin.ndim == 2:
+            origin = origin[keep]
+    if center == "centroid":
+        xy = ce + origin
+    else:
+        # box centre with pixel centres on integers: l + (w − 1)/2
+        xy = st[:, 0:2] + origin + (st[:, 2:4] - 1.0) / 2.0
+    return Detections(frame, xy, st[:, 2:4], None, st[:, cv2.CC_STAT_AREA])
+
+
+def _label(
+    roi: NDArray[np.uint8], connectivity: int
+) -> tuple[NDArray[np.int32], NDArray[np.float64]]:
+    """``cv2.connectedComponentsWithStats`` of ``roi``: statistics and centroids (row 0: the
+    background), with 16-bit labels (a third less memory traffic than 32-bit ones, same
+    result) unless there are more than 65535 components."""
     algo = cv2.CCL_BBDT if connectivity == 8 else cv2.CCL_DEFAULT
-    roi = mask[y0 : y0 + h, x0 : x0 + w]
-    try:  # 16-bit labels: a third less memory traffic than 32-bit ones, same result
+    try:
         _, _, stats, cents = cv2.connectedComponentsWithStatsWithAlgorithm(
             roi, connectivity, cv2.CV_16U, algo
         )
@@ -177,16 +225,4 @@ def blobs_from_mask(
         _, _, stats, cents = cv2.connectedComponentsWithStatsWithAlgorithm(
             roi, connectivity, cv2.CV_32S, algo
         )
-    # columns left, top, width, height, area (CC_STAT_*); row 0 is the background
-    st = stats[1:].astype(np.float64)
-    area = st[:, cv2.CC_STAT_AREA]
-    keep = area >= min_area
-    if max_area is not None:
-        keep &= area <= max_area
-    st = st[keep]
-    if center == "centroid":
-        xy = cents[1:][keep] + (x0, y0)
-    else:
-        # box centre with pixel centres on integers: l + (w − 1)/2
-        xy = st[:, 0:2] + (x0, y0) + (st[:, 2:4] - 1.0) / 2.0
-    return Detections(frame, xy, st[:, 2:4], None, st[:, cv2.CC_STAT_AREA])
+    return stats, cents
