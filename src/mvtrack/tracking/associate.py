@@ -74,6 +74,16 @@ def _cost(dx: FloatArray, dy: FloatArray, scale: FloatArray | None) -> FloatArra
     return dx * dx / scale[:, 0][extra] + dy * dy / scale[:, 1][extra]
 
 
+def _isolated(ok: NDArray[np.bool_]) -> bool:
+    """Whether every track and every detection has at most one gated partner: then the
+    optimal assignment takes every gated pair (each costs less than leaving both unmatched)
+    and no solver is needed."""
+    return bool(
+        np.maximum.reduce(np.add.reduce(ok, axis=1, dtype=np.intp), initial=0) <= 1
+        and np.maximum.reduce(np.add.reduce(ok, axis=0, dtype=np.intp), initial=0) <= 1
+    )
+
+
 def _size_matrix(size: SizeTerm, scale: FloatArray | None) -> FloatArray:
     """Unweighted size term ``Δwᵀ diag(scale)⁻¹ Δw`` of every track × detection pair."""
     twh, dwh, _ = size
@@ -222,9 +232,10 @@ def dense_optimal(
     constant). ``size`` as in :func:`gate_pairs`. Returns matched (track, detection) rows.
     """
     cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
-    out = ~(cost <= gate)  # NaN never passes
-    if np.count_nonzero(out) == out.size:
-        return _EMPTY, _EMPTY
+    ok = cost <= gate  # NaN never passes
+    if _isolated(ok):
+        return ok.nonzero()
+    out = ~ok
     if size is not None:
         cost = _add_size(cost, _size_matrix(size, scale), size[2], gate)
     u = 2.0 * gate
@@ -253,16 +264,19 @@ def dense_two_stage(
     cost = _cost(dx, dy, scale)  # eq. (8) of paper 2, squared (over S)
     plain = scale is None and scale2 is None
     d2 = cost.copy() if plain else None  # the second stage's costs
-    out = ~(cost <= gate)  # NaN never passes
+    ok = cost <= gate  # NaN never passes
     s = None
-    if size is not None:
-        s = _size_matrix(size, scale2)
-        cost = _add_size(cost, s, size[2], gate)
-    u = 2.0 * gate
-    cost[out] = u
-    rows, cols = linear_sum_assignment(cost)
-    keep = cost[rows, cols] < u
-    rows, cols = rows[keep], cols[keep]
+    if _isolated(ok):
+        rows, cols = ok.nonzero()
+    else:
+        if size is not None:
+            s = _size_matrix(size, scale2)
+            cost = _add_size(cost, s, size[2], gate)
+        u = 2.0 * gate
+        cost[~ok] = u
+        rows, cols = linear_sum_assignment(cost)
+        keep = cost[rows, cols] < u
+        rows, cols = rows[keep], cols[keep]
     n, m = cost.shape
     free_d = np.empty(m, dtype=bool)
     free_d.fill(True)
@@ -281,13 +295,18 @@ def dense_two_stage(
     ok = sub <= gate2
     if not np.count_nonzero(ok):
         return rows, cols, ld
-    if s is not None:
-        sub = _add_size(sub, s[lt[:, None], ld], size[2], gate2)
-    u2 = 2.0 * gate2
-    sub[~ok] = u2
-    r2, c2 = linear_sum_assignment(sub)
-    keep = sub[r2, c2] < u2
-    r2, c2 = lt[r2[keep]], ld[c2[keep]]
+    if _isolated(ok):
+        r2, c2 = ok.nonzero()
+    else:
+        if size is not None:
+            sz = _size_matrix(size, scale2) if s is None else s
+            sub = _add_size(sub, sz[lt[:, None], ld], size[2], gate2)
+        u2 = 2.0 * gate2
+        sub[~ok] = u2
+        r2, c2 = linear_sum_assignment(sub)
+        keep = sub[r2, c2] < u2
+        r2, c2 = r2[keep], c2[keep]
+    r2, c2 = lt[r2], ld[c2]
     free_d[c2] = False
     return np.concatenate([rows, r2]), np.concatenate([cols, c2]), free_d.nonzero()[0]
 
