@@ -233,13 +233,13 @@ class TemplateBank:
     # update is a search, a gather, a few column operations and a scatter, whatever the number
     # of tracks. Both end with a sentinel row (uid = int64 max), so a search never runs off
     # the end. Columns: the last full-size detected box (x, y, w, h); the last observed centre
-    # (a detection or a template match); the reference box area (running maximum, decaying
-    # 1 % per detection); the first observed centre; the distance of the last detection from
-    # the first; the tick of the box (−1: none); the number of detections.
-    _BOX, _LAST, _AREA, _ORIGIN, _TRAVEL, _TICK, _HITS = (
-        slice(0, 4), slice(4, 6), 6, slice(7, 9), 9, 10, 11
+    # (a detection or a template match); the last detected centre; the reference box area
+    # (running maximum, decaying 1 % per detection); the first observed centre; the tick of
+    # the box (−1: none); the number of detections.
+    _BOX, _LAST, _LAST_DET, _AREA, _ORIGIN, _TICK, _HITS = (
+        slice(0, 4), slice(4, 6), slice(6, 8), 8, slice(9, 11), 11, 12
     )
-    _NCOL = 12
+    _NCOL = 13
     _SENTINEL = np.iinfo(np.int64).max
 
     def clear(self) -> None:
@@ -338,7 +338,7 @@ class TemplateBank:
         area = wh[:, 0] * wh[:, 1]
         full = area >= self.min_fill * f[:, self._AREA]
         if full.all():  # the common case: every box is its track's new appearance
-            f[:, 0:6] = np.concatenate([xy, wh, xy], axis=1)  # box, last centre
+            f[:, 0:8] = np.concatenate([xy, wh, xy, xy], axis=1)  # box, last (detected) centre
             f[:, self._TICK] = self._tick + 1
         else:
             # a track whose detection just shrank keeps its last full appearance: cut it now
@@ -348,10 +348,9 @@ class TemplateBank:
             f[full, 0:2] = xy[full]
             f[full, 2:4] = wh[full]
             f[:, self._LAST] = xy
+            f[:, self._LAST_DET] = xy
             f[full, self._TICK] = self._tick + 1
         np.maximum(area, 0.99 * f[:, self._AREA], out=f[:, self._AREA])
-        d = xy - f[:, self._ORIGIN]
-        f[:, self._TRAVEL] = np.sqrt((d * d).sum(axis=1))
         f[:, self._HITS] += 1.0
         self._f[pos] = f
         self._tick += 1
@@ -365,8 +364,11 @@ class TemplateBank:
             self._mask = self._mask_buf
 
     def _eligible_rows(self, f: FloatArray) -> BoolArray:
-        need = np.maximum(self.min_travel * f[:, 2:4].max(axis=1), self.min_travel_px)
-        return (f[:, self._TRAVEL] >= need) & (f[:, self._HITS] >= self.min_hits)
+        """Last detection ≥ max(min_travel · box length, min_travel_px) from the first one, and
+        ≥ min_hits detections (compared squared: no square root)."""
+        d = f[:, self._LAST_DET] - f[:, self._ORIGIN]
+        need = np.maximum(self.min_travel * np.maximum(f[:, 2], f[:, 3]), self.min_travel_px)
+        return ((d * d).sum(axis=1) >= need * need) & (f[:, self._HITS] >= self.min_hits)
 
     @property
     def eligible(self) -> BoolArray:
