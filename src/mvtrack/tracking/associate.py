@@ -74,14 +74,15 @@ def _cost(dx: FloatArray, dy: FloatArray, scale: FloatArray | None) -> FloatArra
     return dx * dx / scale[:, 0][extra] + dy * dy / scale[:, 1][extra]
 
 
-def _isolated(ok: NDArray[np.bool_]) -> bool:
-    """Whether every track and every detection has at most one gated partner: then the
-    optimal assignment takes every gated pair (each costs less than leaving both unmatched)
-    and no solver is needed."""
-    return bool(
-        np.maximum.reduce(np.add.reduce(ok, axis=1, dtype=np.intp), initial=0) <= 1
-        and np.maximum.reduce(np.add.reduce(ok, axis=0, dtype=np.intp), initial=0) <= 1
-    )
+def _isolated(ok: NDArray[np.bool_]) -> tuple[IntArray, IntArray] | None:
+    """The gated pairs ``(rows, cols)`` of ``ok`` if every track and every detection has at
+    most one gated partner, else None. Isolated pairs need no solver: the optimal assignment
+    takes each of them (each costs less than leaving both unmatched)."""
+    r, c = ok.nonzero()
+    k = r.size
+    if k == 0 or (np.count_nonzero(np.bincount(r)) == k and np.count_nonzero(np.bincount(c)) == k):
+        return r, c
+    return None
 
 
 def _size_matrix(size: SizeTerm, scale: FloatArray | None) -> FloatArray:
@@ -233,8 +234,9 @@ def dense_optimal(
     """
     cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
     ok = cost <= gate  # NaN never passes
-    if _isolated(ok):
-        return ok.nonzero()
+    pairs = _isolated(ok)
+    if pairs is not None:
+        return pairs
     out = ~ok
     if size is not None:
         cost = _add_size(cost, _size_matrix(size, scale), size[2], gate)
@@ -266,8 +268,9 @@ def dense_two_stage(
     d2 = cost.copy() if plain else None  # the second stage's costs
     ok = cost <= gate  # NaN never passes
     s = None
-    if _isolated(ok):
-        rows, cols = ok.nonzero()
+    pairs = _isolated(ok)
+    if pairs is not None:
+        rows, cols = pairs
     else:
         if size is not None:
             s = _size_matrix(size, scale2)
@@ -295,8 +298,9 @@ def dense_two_stage(
     ok = sub <= gate2
     if not np.count_nonzero(ok):
         return rows, cols, ld
-    if _isolated(ok):
-        r2, c2 = ok.nonzero()
+    pairs = _isolated(ok)
+    if pairs is not None:
+        r2, c2 = pairs
     else:
         if size is not None:
             sz = _size_matrix(size, scale2) if s is None else s
