@@ -366,11 +366,11 @@ def test_euclidean_gate_stretches_with_the_box_per_axis(wh, jump, size_ref, kept
     assert (last.track_id.tolist() == [1] and last.det_index.tolist() == [0]) == kept
 
 
-def test_measurement_noise_scales_with_the_box_area_factor() -> None:
-    wh = np.array([160.0, 80.0])  # f_x = 4, f_y = 2 at size_ref 40: r = 3² · 8 px²
+def test_measurement_noise_scales_with_the_larger_box_factor() -> None:
+    wh = np.array([160.0, 80.0])  # f_x = 4, f_y = 2 at size_ref 40: r = 2² · 4² px²
     frames = _jump_frames(wh, np.array([0.0, 0.0]))
-    scaled = Tracker(TrackerConfig(size_ref=40.0))
-    plain = Tracker(TrackerConfig(size_ref=None, measurement_std=3.0 * np.sqrt(8.0)))
+    scaled = Tracker(TrackerConfig(size_ref=40.0, measurement_std=2.0))
+    plain = Tracker(TrackerConfig(size_ref=None, measurement_std=2.0 * 4.0))
     for d in frames:
         a, b = scaled.step(d), plain.step(d)
     np.testing.assert_allclose(scaled.pstate.P, plain.pstate.P, rtol=1e-12)

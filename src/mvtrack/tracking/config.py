@@ -121,13 +121,15 @@ class TrackerConfig:
         ``size_ref`` wide and high; a track whose (smoothed) box is larger has them stretched
         with it, by ``f_x = max(1, w / size_ref)`` along x and ``f_y = max(1, h / size_ref)``
         along y: the Euclidean gates become ellipses ``Δx²/f_x² + Δy²/f_y² <= gate``, the
-        measurement variance ``r f_x f_y`` and the recovery margin ``√(f_x f_y)`` times its
-        value. A detector whose error grows with the box (5 % of a 180 px tall person is
-        9 px) then meets a gate and a noise model of the same relative size, as the
-        box-height-proportional noise of DeepSORT. The motion parameters (``accel_std``,
-        ``init_velocity_std``, ``recover_speed``) are not scaled. The noise is scaled only with
-        the closed-form ``kalman-cv``, the gates only for ``euclidean`` (and ``mahalanobis``
-        through the scaled noise). ``None`` disables the scaling.
+        measurement variance ``r max(f_x, f_y)²`` and the recovery margin ``max(f_x, f_y)``
+        times its value. A detector whose error grows with the box (5 % of a 180 px tall
+        person is 9 px) then meets a gate and a noise model of the same relative size, as
+        the box-height-proportional noise of DeepSORT; the one isotropic variance per track
+        follows the larger factor so that it covers the noisier axis (a person's height).
+        The motion parameters (``accel_std``, ``init_velocity_std``, ``recover_speed``) are
+        not scaled. The noise is scaled only with the closed-form ``kalman-cv``, the gates
+        only for ``euclidean`` (and ``mahalanobis`` through the scaled noise). ``None``
+        disables the scaling.
     size_weight : float
         In [0, 1). With the ``euclidean`` distance, the assignment cost of a gated pair is
         ``Δxᵀ F⁻² Δx + size_weight · min(Δwᵀ F⁻² Δw, gate)``: the squared position
@@ -156,7 +158,7 @@ class TrackerConfig:
     confirm_window: float | None = None
     max_coast: float = 0.3
     tentative_max_coast: float = 0.0
-    measurement_std: float | None = 3.0
+    measurement_std: float | None = 2.0
     init_velocity_std: float | None = 150.0
     accel_std: float | None = 200.0
     second_gate: float | None = 20.0
@@ -331,7 +333,7 @@ def paper2(distance: str = "coupled", fps: float = 15.0) -> TrackerConfig:
 def default(fps: float = 30.0) -> TrackerConfig:
     """The modern default, ``TrackerConfig(fps=fps)`` (chosen on the crowd benchmark,
     docs/bench/tracker.md, and on real boxes, docs/bench/tud.md): closed-form per-axis
-    constant-velocity KF (σ_z = 3 px, σ_a = 200 px/s², velocity prior 150 px/s); association
+    constant-velocity KF (σ_z = 2 px, σ_a = 200 px/s², velocity prior 150 px/s); association
     in stages, each the gated global nearest neighbour (``optimal``): a 10 px Euclidean gate,
     then 20 px for the tracks and detections left over, then the recovery stage (250 px/s
     from the last measurement) for established targets that turned or bounced. σ_z, the

@@ -332,7 +332,7 @@ class Tracker:
             if self._ref is not None and np.count_nonzero(tab.floats[:, WH] > self._ref):
                 f2 = self._size_scale2(tab.floats[:, WH])
                 if self._scale_r:
-                    r_rows = pred.r * self._r_factor(f2)  # r f_x f_y per track
+                    r_rows = pred.r * self._r_factor(f2)  # r max(f_x, f_y)² per track
             staged = False
             if m == 0:
                 mt = md = ud = _EMPTY
@@ -514,7 +514,7 @@ class Tracker:
         A confirmed (or coasting, or stopped) track with at least ``recover_min_hits``
         associations, measured within the last ``recover_window``, that has no detection in
         its gate may take an unassigned detection within ``r = v_max Δk + margin`` of its last
-        measurement, Δk the frames since that measurement (the margin times ``√(f_x f_y)``
+        measurement, Δk the frames since that measurement (the margin times ``max(f_x, f_y)``
         when the box size scales the gates); pairs are chosen by the gated
         global nearest neighbour on ``|z − y_last|² / r²``. Returns the recovered track rows
         and their detections.
@@ -548,8 +548,9 @@ class Tracker:
 
     @staticmethod
     def _r_factor(f2: FloatArray) -> FloatArray:
-        """``f_x f_y`` (N,): the factor of the measurement variance (the box's area factor)."""
-        return np.sqrt(f2[:, 0] * f2[:, 1])
+        """``max(f_x, f_y)²`` (N,): the factor of the measurement variance (the larger axis's,
+        so that the one isotropic variance covers the noisier axis)."""
+        return np.maximum(f2[:, 0], f2[:, 1])
 
     def _warmup_centre(self, tab: TrackTable, pxy: FloatArray, k: int) -> FloatArray:
         """Paper 1's warm-up gate centre (SPEC §1.1 [R]).
@@ -603,7 +604,7 @@ class Tracker:
             ud = ud[birth_order(dets.xy[ud])]
         xy = dets.xy[ud]
         wh = dets.wh[ud]
-        if self._scale_r and np.count_nonzero(wh > self._ref):  # r f_x f_y from the detection's box
+        if self._scale_r and np.count_nonzero(wh > self._ref):  # r f² from the detection's box
             r_new = self.predictor.r * self._r_factor(self._size_scale2(wh))
             new_ps = self.predictor.init(xy, r_new)
         else:
