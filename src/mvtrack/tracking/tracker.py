@@ -11,6 +11,9 @@ and §2.1 steps 3–5 (paper 2):
    :mod:`mvtrack.tracking.associate` for the disc-shaped gates (``euclidean``, and
    ``mahalanobis`` with the closed-form ``kalman-cv``), otherwise through
    :func:`mvtrack.association.candidate_pairs` and :func:`mvtrack.association.assign`;
+   for boxes larger than ``size_ref`` the Euclidean gates stretch per axis with the box and
+   the measurement noise with it, and the Euclidean cost gets a box-size term
+   (``size_weight``);
 3. optionally a **second stage** (``second_gate``: a wider Euclidean gate for the tracks and
    detections left over) and a **recovery stage** (``recover_speed``: an established track
    that lost its target may take a leftover detection near its last measurement; its
@@ -19,7 +22,8 @@ and §2.1 steps 3–5 (paper 2):
    pipeline's template matching; the ones it finds are held in state ``STOPPED``;
 5. **update** the predictors with the assigned measurements (eqs. (3)–(5) of paper 1);
 6. **life cycle** (:mod:`mvtrack.tracking.lifecycle`): confirm, coast, delete, and start new
-   tentative tracks from the unassigned detections (new-target recognition, SPEC §2.1 step 4).
+   tentative tracks from the unassigned detections (new-target recognition, SPEC §2.1 step 4);
+   a coasting track's rows are output only for its first ``coast_output`` seconds.
 
 ``kalman-cv`` runs in the closed form of :mod:`mvtrack.tracking.fastkf` (the same filter as
 :mod:`mvtrack.filters.predictors`' ``kalman-cv``, tested equal to 1e-9); every other predictor
