@@ -291,10 +291,10 @@ def dense_two_stage(
     free_t[rows] = False
     lt, ld = free_t.nonzero()[0], free_d.nonzero()[0]
     if d2 is not None:
-        sub = d2[lt[:, None], ld]
+        sub = d2.take(lt, 0).take(ld, 1)
     else:
-        sub = _cost(dx[lt[:, None], ld], dy[lt[:, None], ld],
-                    None if scale2 is None else scale2[lt])
+        sub = _cost(dx.take(lt, 0).take(ld, 1), dy.take(lt, 0).take(ld, 1),
+                    None if scale2 is None else scale2.take(lt, 0))
     ok = sub <= gate2
     if not np.count_nonzero(ok):
         return rows, cols, ld
@@ -304,7 +304,7 @@ def dense_two_stage(
     else:
         if size is not None:
             sz = _size_matrix(size, scale2) if s is None else s
-            sub = _add_size(sub, sz[lt[:, None], ld], size[2], gate2)
+            sub = _add_size(sub, sz.take(lt, 0).take(ld, 1), size[2], gate2)
         u2 = 2.0 * gate2
         sub[~ok] = u2
         r2, c2 = linear_sum_assignment(sub)

@@ -36,18 +36,24 @@ STOPPED = int(TrackState.STOPPED)
 
 # integer columns of the tracker's table (mvtrack.tracking.tracker.TrackTable.ints)
 UID, TID, STATE, HITS, MISSES, AGE, LAST_K, PREV_K = range(8)
+#: what one frame adds to every row: misses and age + 1
+_COUNTER_STEP = np.zeros(8, dtype=np.int64)
+_COUNTER_STEP[[MISSES, AGE]] = 1
 
 
-def count_hits(ints: IntArray, matched: BoolArray, held: IntArray) -> None:
+def count_hits(ints: IntArray, matched: BoolArray, held: BoolArray | IntArray) -> None:
     """Advance the counters of every track by one frame, in place.
 
     ``hits`` counts associations with a detection (``matched``); ``misses`` counts
-    consecutive frames without a detection or template match (``held``: row indices of the
-    tracks that got either); ``age`` counts frames since birth.
+    consecutive frames without a detection or template match (``held``: a mask of the tracks
+    that got either, or their row indices); ``age`` counts frames since birth.
     """
     ints[:, HITS] += matched
-    ints[:, MISSES : AGE + 1] += 1  # misses and age (adjacent columns)
-    ints[held, MISSES] = 0
+    ints += _COUNTER_STEP  # misses and age + 1 (one add over the whole block)
+    if held.dtype == np.bool_:
+        np.copyto(ints[:, MISSES], 0, where=held)  # cheaper than a masked assignment
+    else:
+        ints[held, MISSES] = 0
 
 
 def next_state(
@@ -83,10 +89,10 @@ def next_state(
     tentative = ints[:, STATE] == TENTATIVE
     confirmed_now = tentative & (ints[:, HITS] >= fp.confirm_hits) & (age <= fp.confirm_window)
     still = tentative ^ confirmed_now
-    state = np.where(matched, CONFIRMED, COASTING)
+    state = COASTING - matched  # CONFIRMED (= COASTING − 1) where matched
     if rescued is not None:
         state[rescued] = STOPPED
-    state[still] = TENTATIVE
+    np.copyto(state, TENTATIVE, where=still)
     delete = np.where(
         still,
         (misses > fp.tentative_max_misses) | (age >= fp.confirm_window),

@@ -75,6 +75,8 @@ N_INT = 8
 #: float columns: last measurement (x, y), the one before (x, y), box (w, h)
 LAST_XY, PREV_XY, WH = slice(0, 2), slice(2, 4), slice(4, 6)
 N_FLOAT = 6
+#: the float columns of a new track from its detection's ``x, y, w, h``
+_BIRTH_COLS = np.array([0, 1, 0, 1, 2, 3])
 
 
 @dataclass(frozen=True)
@@ -106,7 +108,7 @@ class TrackTable:
 
     def take(self, idx: NDArray[np.intp]) -> TrackTable:
         """Rows ``idx``."""
-        return TrackTable(self.ints[idx], self.floats[idx])
+        return TrackTable(self.ints.take(idx, 0), self.floats.take(idx, 0))
 
     @property
     def uid(self) -> IntArray:
@@ -166,8 +168,19 @@ class TrackTable:
 
 def _take_state(state: Any, idx: NDArray[np.intp]) -> Any:
     if type(state) is CVState:
-        return CVState(state.x[idx], state.P[idx])
+        return CVState(state.x.take(idx, 0), state.P.take(idx, 0))
     return _batch.take(state, idx)
+
+
+def _detection_rows(dets: Detections) -> FloatArray:
+    """(M + 1, 4): each detection's ``x, y, w, h``, then a row of NaN (the one index −1 takes,
+    so that one ``take`` by a track's detection index also fills the tracks without one)."""
+    m = dets.xy.shape[0]
+    rows = np.empty((m + 1, 4))
+    rows[:m, :2] = dets.xy
+    rows[:m, 2:] = dets.wh
+    rows[m] = np.nan
+    return rows
 
 
 def _put_state(state: Any, idx: NDArray[np.intp], new: Any) -> Any:
@@ -320,11 +333,12 @@ class Tracker:
         fp = self._fp
         k = self._k
         tab = self.tracks
-        n = len(tab)
-        m = len(dets)
+        n = tab.ints.shape[0]
+        m = dets.xy.shape[0]
         pred = self.predictor
         out = None
         ps = self.pstate
+        drow = _detection_rows(dets)
         if n == 0:
             ud = np.arange(m)
         else:
@@ -359,7 +373,7 @@ class Tracker:
                     ud = ud[~used[ud]]
             recovered = None
             if self._fp.recover_speed is not None and ud.size and mt.size < n:
-                mt2, md2 = self._recover(tab, det_index, dets, ud, k, f2)
+                mt2, md2 = self._recover(tab, det_index, drow, ud, k, f2)
                 if mt2.size:
                     det_index[mt2] = md2
                     mt, md = np.concatenate([mt, mt2]), np.concatenate([md, md2])
@@ -367,17 +381,16 @@ class Tracker:
                     used[md2] = True
                     ud = ud[~used[ud]]
                     recovered = mt2
-            z = np.empty((n, 2))
-            z.fill(np.nan)
-            z[mt] = dets.xy[md]
+            # each track's detection (x, y, w, h); NaN for the tracks without one (index −1)
+            zwh = drow.take(det_index, 0)
+            z = zwh[:, :2]
             matched = det_index >= 0
             rescued = None
-            held, hi = matched, mt
+            held = matched
             if rescue is not None:
                 rescued = self._rescue(rescue, tab, gxy, matched, z)  # fills z in place
                 if rescued is not None:
                     held = matched | rescued
-                    hi = held.nonzero()[0]
             if r_rows is None:
                 ps = pred.update(ps, z, held)  # measurement update, eqs. (3)–(5) of paper 1
             else:
@@ -387,13 +400,16 @@ class Tracker:
                        else pred.init(z[recovered], r_rows[recovered]))
                 ps = _put_state(ps, recovered, new)
             ints, flo = tab.ints.copy(), tab.floats.copy()
-            count_hits(ints, matched, hi)
-            ints[hi, PREV_K] = ints[hi, LAST_K]
-            ints[hi, LAST_K] = k
-            flo[hi, PREV_XY] = flo[hi, LAST_XY]
-            flo[hi, LAST_XY] = z[hi]
+            count_hits(ints, matched, held)
+            np.copyto(ints[:, PREV_K], ints[:, LAST_K], where=held)
+            np.copyto(ints[:, LAST_K], k, where=held)
+            held2 = held[:, None]
+            np.copyto(flo[:, PREV_XY], flo[:, LAST_XY], where=held2)
+            np.copyto(flo[:, LAST_XY], z, where=held2)
             if mt.size:  # box size: exponential average of the associated detections
-                flo[mt, WH] += self.config.size_smoothing * (dets.wh[md] - flo[mt, WH])
+                wh = flo[:, WH]
+                np.add(wh, self.config.size_smoothing * (zwh[:, 2:] - wh), out=wh,
+                       where=matched[:, None])
             state, delete, confirmed_now = next_state(ints, matched, rescued, fp)
             ints[:, STATE] = state
             if np.count_nonzero(confirmed_now):
@@ -402,13 +418,13 @@ class Tracker:
             if fp.coast_output is not None:  # long coasting: alive, but no longer output
                 show &= ints[:, MISSES] <= fp.coast_output
             rows = show.nonzero()[0]
-            oi = ints[rows]
+            oi = ints.take(rows, 0)
             of = np.concatenate(  # one gather for all float columns of the output
                 [z, pred.position(ps), gxy, flo[:, WH], pred.velocity(ps)], axis=1
-            )[rows]
+            ).take(rows, 0)
             out = (
-                oi[:, TID], oi[:, STATE], det_index[rows], of[:, 0:2], of[:, 2:4], of[:, 4:6],
-                of[:, 6:8], of[:, 8:10],
+                oi[:, TID], oi[:, STATE], det_index.take(rows), of[:, 0:2], of[:, 2:4],
+                of[:, 4:6], of[:, 6:8], of[:, 8:10],
             )
             out_uid = oi[:, UID]
             tab = TrackTable(ints, flo)
@@ -418,7 +434,7 @@ class Tracker:
                 ps = _take_state(ps, keep)
         born = None
         if ud.size:
-            tab, ps, born, born_uid = self._births(tab, ps, dets, ud, k)
+            tab, ps, born, born_uid = self._births(tab, ps, drow, ud, k)
         self.tracks, self.pstate = tab, ps
         self._k = k + 1
         if born is None:
@@ -510,7 +526,7 @@ class Tracker:
         return cand[mt], ud[md]
 
     def _recover(
-        self, tab: TrackTable, det_index: IntArray, dets: Detections, ud: NDArray[np.intp],
+        self, tab: TrackTable, det_index: IntArray, drow: FloatArray, ud: NDArray[np.intp],
         k: int, f2: FloatArray | None = None,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         """Second association stage: lost confirmed tracks vs unassigned detections.
@@ -520,8 +536,9 @@ class Tracker:
         its gate may take an unassigned detection within ``r = v_max Δk + margin`` of its last
         measurement, Δk the frames since that measurement (the margin times ``max(f_x, f_y)``
         when the box size scales the gates); pairs are chosen by the gated
-        global nearest neighbour on ``|z − y_last|² / r²``. Returns the recovered track rows
-        and their detections.
+        global nearest neighbour on ``|z − y_last|² / r²``. ``drow`` are the detections' rows
+        ``x, y, w, h`` (:func:`_detection_rows`). Returns the recovered track rows and their
+        detections.
         """
         ints = tab.ints
         cand = (
@@ -535,13 +552,14 @@ class Tracker:
         margin = self.config.recover_margin
         if f2 is not None:
             margin = margin * np.sqrt(self._r_factor(f2[cand]))
-        radius = self._fp.recover_speed * (k - ints[cand, LAST_K]) + margin
+        radius = self._fp.recover_speed * (k - ints.take(cand, 0)[:, LAST_K]) + margin
         r2 = radius * radius
-        last_xy = tab.floats[cand, LAST_XY]
+        last_xy = tab.floats.take(cand, 0)[:, LAST_XY]
+        dxy = drow.take(ud, 0)[:, :2]
         if cand.size * ud.size <= fast_assoc.DENSE_LSA:
-            mt, md = fast_assoc.dense_optimal(last_xy, dets.xy[ud], r2, 1.0)
+            mt, md = fast_assoc.dense_optimal(last_xy, dxy, r2, 1.0)
         else:
-            ti, dj, cost = fast_assoc.gate_pairs(last_xy, dets.xy[ud], r2, 1.0)
+            ti, dj, cost = fast_assoc.gate_pairs(last_xy, dxy, r2, 1.0)
             mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
         return cand[mt], ud[md]
 
@@ -600,14 +618,17 @@ class Tracker:
         return rescued
 
     def _births(
-        self, tab: TrackTable, ps: Any, dets: Detections, ud: NDArray[np.intp], k: int
+        self, tab: TrackTable, ps: Any, drow: FloatArray, ud: NDArray[np.intp], k: int
     ) -> tuple[TrackTable, Any, tuple | None, IntArray]:
-        """New tentative tracks from the unassigned detections ``ud`` (SPEC §2.1 step 4)."""
+        """New tentative tracks from the unassigned detections ``ud`` (SPEC §2.1 step 4);
+        ``drow`` are the detections' rows ``x, y, w, h`` (:func:`_detection_rows`)."""
         b = ud.size
+        src = drow.take(ud, 0)
         if b > 1:
-            ud = ud[birth_order(dets.xy[ud])]
-        xy = dets.xy[ud]
-        wh = dets.wh[ud]
+            order = birth_order(src[:, :2])
+            ud, src = ud.take(order), src.take(order, 0)
+        floats = src.take(_BIRTH_COLS, 1)  # last_xy, prev_xy (both the detection), wh
+        xy, wh = floats[:, LAST_XY], floats[:, WH]
         if self._scale_r and np.count_nonzero(wh > self._ref):  # r f² from the detection's box
             r_new = self.predictor.r * self._r_factor(self._size_scale2(wh))
             new_ps = self.predictor.init(xy, r_new)
@@ -624,7 +645,7 @@ class Tracker:
             ints[:, STATE] = CONFIRMED
             ints[:, TID] = np.arange(self._next_id, self._next_id + b)
             self._next_id += b
-        new = TrackTable(ints, np.concatenate([xy, xy, wh], axis=1))
+        new = TrackTable(ints, floats)
         born = None
         if one or self.config.output_tentative:
             born = (
