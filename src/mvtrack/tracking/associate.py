@@ -121,7 +121,8 @@ def gate_pairs(
         ti, dj = np.nonzero(cost <= gate)
         return ti, dj, _pair_size(ti, dj, cost[ti, dj], scale, gate, size)
     if scale is None:
-        radius = np.full(n, np.sqrt(gate))
+        radius = np.empty(n)
+        radius.fill(np.sqrt(gate))
     else:
         radius = np.sqrt(gate * (scale if scale.ndim == 1 else scale.max(axis=1)))
     if n * m <= DENSE_PAIRS:
@@ -129,11 +130,11 @@ def gate_pairs(
         ti, dj = band_pairs(txy, dxy, rx)
     else:
         ti, dj = spatial_pairs(txy, dxy, radius)
-    d = dxy[dj] - txy[ti]
-    cost = _cost(d[:, 0], d[:, 1], None if scale is None else scale[ti])
+    d = dxy.take(dj, 0) - txy.take(ti, 0)
+    cost = _cost(d[:, 0], d[:, 1], None if scale is None else scale.take(ti, 0))
     keep = cost <= gate
-    ti, dj = ti[keep], dj[keep]
-    return ti, dj, _pair_size(ti, dj, cost[keep], scale, gate, size)
+    ti, dj = ti.compress(keep), dj.compress(keep)
+    return ti, dj, _pair_size(ti, dj, cost.compress(keep), scale, gate, size)
 
 
 def _pair_size(
@@ -144,8 +145,8 @@ def _pair_size(
     if size is None or ti.size == 0:
         return cost
     twh, dwh, weight = size
-    d = dwh[dj] - twh[ti]
-    s = _cost(d[:, 0], d[:, 1], None if scale is None else scale[ti])
+    d = dwh.take(dj, 0) - twh.take(ti, 0)
+    s = _cost(d[:, 0], d[:, 1], None if scale is None else scale.take(ti, 0))
     return _add_size(cost, s, weight, gate)
 
 
@@ -156,7 +157,7 @@ def band_pairs(txy: FloatArray, dxy: FloatArray, rx: FloatArray) -> tuple[IntArr
     ``N × M`` matrix and than the grid of :func:`spatial_pairs`.
     """
     order = np.argsort(dxy[:, 0], kind="stable")
-    xs = dxy[order, 0]
+    xs = dxy[:, 0].take(order)
     tx = txy[:, 0]
     start = np.searchsorted(xs, tx - rx, side="left")
     count = np.searchsorted(xs, tx + rx, side="right") - start
@@ -316,8 +317,9 @@ def dense_two_stage(
 
 
 def _first_of_runs(key: IntArray) -> NDArray[np.bool_]:
-    first = np.ones(key.shape[0], dtype=bool)
-    first[1:] = key[1:] != key[:-1]
+    first = np.empty(key.shape[0], dtype=bool)
+    first[:1] = True
+    np.not_equal(key[1:], key[:-1], out=first[1:])
     return first
 
 

@@ -32,6 +32,9 @@ import numpy as np
 from mvtrack.filters.base import BoolArray, FloatArray
 from mvtrack.filters.models import check_positive
 
+#: the columns of ``(a, b, c)`` that multiply the innovation of ``(px, py, vx, vy)`` in the gain
+_GAIN_COLS = np.array([0, 0, 1, 1])
+
 
 @dataclass(frozen=True)
 class CVState:
@@ -110,11 +113,11 @@ class FastCVPredictor:
         nu = z - x[:, :2]  # innovation per axis (NaN where missing)
         ok = mask & (nu[:, 0] == nu[:, 0])  # and not NaN
         w = ok / (P[:, 0] + (self.r if r is None else r))  # 1/S, eq. (3); 0 where no measurement
-        gain = P[:, :2] * w[:, None]  # K = [a, b]ᵀ / S, eq. (3)
-        nu[~ok] = 0.0
-        xn = (x.reshape(-1, 2, 2) + gain[:, :, None] * nu[:, None, :]).reshape(-1, 4)  # (4)
+        gain = P.take(_GAIN_COLS, 1) * w[:, None]  # K = [a, b]ᵀ / S, eq. (3), as (a, a, b, b)/S
+        np.copyto(nu, 0.0, where=~ok[:, None])
+        xn = x + gain * np.concatenate((nu, nu), axis=1)  # eq. (4) for (px, py, vx, vy)
         Pn = P * (1.0 - gain[:, 0])[:, None]  # eq. (5): a r/S, b r/S, c − b²/S
-        Pn[:, 2] = P[:, 2] - P[:, 1] * gain[:, 1]
+        Pn[:, 2] = P[:, 2] - P[:, 1] * gain[:, 2]
         return CVState(xn, Pn)
 
     def position(self, state: CVState) -> FloatArray:

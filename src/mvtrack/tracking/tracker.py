@@ -106,8 +106,10 @@ class TrackTable:
         """No tracks."""
         return cls(np.zeros((0, N_INT), dtype=np.int64), np.zeros((0, N_FLOAT)))
 
-    def take(self, idx: NDArray[np.intp]) -> TrackTable:
-        """Rows ``idx``."""
+    def take(self, idx: NDArray[np.intp] | slice) -> TrackTable:
+        """Rows ``idx`` (row indices, or a slice: views)."""
+        if isinstance(idx, slice):
+            return TrackTable(self.ints[idx], self.floats[idx])
         return TrackTable(self.ints.take(idx, 0), self.floats.take(idx, 0))
 
     @property
@@ -166,8 +168,10 @@ class TrackTable:
         return self.floats[:, WH]
 
 
-def _take_state(state: Any, idx: NDArray[np.intp]) -> Any:
+def _take_state(state: Any, idx: NDArray[np.intp] | slice) -> Any:
     if type(state) is CVState:
+        if isinstance(idx, slice):
+            return CVState(state.x[idx], state.P[idx])
         return CVState(state.x.take(idx, 0), state.P.take(idx, 0))
     return _batch.take(state, idx)
 
@@ -364,7 +368,7 @@ class Tracker:
             det_index.fill(-1)
             det_index[mt] = md
             if self._gate2 is not None and not staged and ud.size and mt.size < n:
-                mt2, md2 = self._second_stage(gxy, det_index, dets, ud, f2, tab.floats[:, WH])
+                mt2, md2 = self._second_stage(gxy, det_index, drow, ud, f2, tab.floats[:, WH])
                 if mt2.size:
                     det_index[mt2] = md2
                     mt, md = np.concatenate([mt, mt2]), np.concatenate([md, md2])
@@ -430,6 +434,8 @@ class Tracker:
             tab = TrackTable(ints, flo)
             if np.count_nonzero(delete):
                 keep = (~delete).nonzero()[0]
+                if keep.size == 0 or keep[-1] == keep.size - 1:  # only the last rows end
+                    keep = slice(0, keep.size)
                 tab = tab.take(keep)
                 ps = _take_state(ps, keep)
         born = None
@@ -477,7 +483,7 @@ class Tracker:
         Euclidean gates per axis (``Δx²/f_x² + Δy²/f_y² <= gate``), ``r_rows`` (N,) are the
         tracks' measurement variances, ``twh`` (N, 2) their box sizes (for the size term of
         the Euclidean cost, ``config.size_weight``)."""
-        n, m = gxy.shape[0], len(dets)
+        n, m = gxy.shape[0], dets.xy.shape[0]
         scale = f2
         size = (twh, dets.wh, self._size_w) if self._size_w else None
         if self._fast_gate == "mahalanobis":
@@ -505,21 +511,24 @@ class Tracker:
         return mt, md, (~used).nonzero()[0], staged
 
     def _second_stage(
-        self, gxy: FloatArray, det_index: IntArray, dets: Detections, ud: NDArray[np.intp],
+        self, gxy: FloatArray, det_index: IntArray, drow: FloatArray, ud: NDArray[np.intp],
         f2: FloatArray | None, twh: FloatArray,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         """Second association stage: the tracks left unmatched by the first stage against the
         detections left unassigned, with the wider Euclidean gate ``second_gate`` (px, stretched
         per axis by the size factors ``f_x, f_y``) around the prediction (gated global nearest
-        neighbour on the squared distance)."""
+        neighbour on the squared distance). ``drow`` are the detections' rows ``x, y, w, h``
+        (:func:`_detection_rows`)."""
         cand = (det_index < 0).nonzero()[0]
         g = self._gate2
-        scale = None if f2 is None else f2[cand]
-        size = (twh[cand], dets.wh[ud], self._size_w) if self._size_w else None
+        scale = None if f2 is None else f2.take(cand, 0)
+        left = drow.take(ud, 0)
+        size = (twh.take(cand, 0), left[:, 2:], self._size_w) if self._size_w else None
+        txy, dxy = gxy.take(cand, 0), left[:, :2]
         if cand.size * ud.size <= fast_assoc.DENSE_LSA:  # the same result, one dense solve
-            mt, md = fast_assoc.dense_optimal(gxy[cand], dets.xy[ud], scale, g, size)
+            mt, md = fast_assoc.dense_optimal(txy, dxy, scale, g, size)
             return cand[mt], ud[md]
-        ti, dj, cost = fast_assoc.gate_pairs(gxy[cand], dets.xy[ud], scale, g, size)
+        ti, dj, cost = fast_assoc.gate_pairs(txy, dxy, scale, g, size)
         if ti.size == 0:
             return _EMPTY, _EMPTY
         mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, g)
