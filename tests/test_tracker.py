@@ -83,10 +83,11 @@ def test_gap_is_bridged_by_coasting_with_the_same_id() -> None:
     )
     assert log.track_ids.tolist() == [1]
     for k, tf in enumerate(log):
-        if k < 2:
-            assert len(tf) == 0  # tentative, not output
-            continue
         assert tf.track_id.tolist() == [1]
+        if k < 2:  # tentative then, written with the ID it got on confirmation (backfill)
+            assert tf.state.tolist() == [TrackState.TENTATIVE]
+            assert tf.det_index.tolist() == [0]
+            continue
         if 20 <= k < 26:
             assert tf.state.tolist() == [TrackState.COASTING]
             assert tf.det_index.tolist() == [-1]
@@ -107,9 +108,11 @@ def test_birth_and_death_at_the_right_frames() -> None:
     config = TrackerConfig(confirm_hits=3, max_coast=0.2, coast_output=None)
     log = track_detections(_frames({0: a}, n), config)
     shown = [k for k, tf in enumerate(log) if len(tf)]
-    # born at 5, confirmed on its 3rd hit (frame 7), coasts 31..36, deleted at 37
-    assert shown == list(range(7, 37))
+    # born at 5, confirmed on its 3rd hit (frame 7), coasts 31..36, deleted at 37; its
+    # tentative rows 5 and 6 are written once it is confirmed (backfill)
+    assert shown == list(range(5, 37))
     states = {k: int(log[k].state[0]) for k in shown}
+    assert states[5] == states[6] == TrackState.TENTATIVE
     assert all(states[k] == TrackState.CONFIRMED for k in range(7, 31))
     assert all(states[k] == TrackState.COASTING for k in range(31, 37))
 
@@ -126,15 +129,34 @@ def test_tentative_tracks_are_output_with_id_minus_one_when_asked() -> None:
 def test_confirmation_needs_hits_within_the_window() -> None:
     a = _line([10.0, 10.0], [1.0, 0.0], 12)
     a[1] = a[3] = np.nan  # hits at 0, 2, 4, 5, ...
-    strict = track_detections(_frames({0: a}, 12), TrackerConfig(confirm_hits=3))
+    strict_config = TrackerConfig(confirm_hits=3, backfill=False)
+    strict = track_detections(_frames({0: a}, 12), strict_config)
     # consecutive hits required: the track born at 0 dies at its first miss, and so on
     assert strict.track_ids.tolist() == [1]
     assert next(k for k, tf in enumerate(strict) if len(tf)) == 6
-    lenient = track_detections(
-        _frames({0: a}, 12),
-        TrackerConfig(confirm_hits=3, confirm_window=5 / 30, tentative_max_coast=1 / 30),
-    )
+    lenient_config = strict_config.replace(confirm_window=5 / 30, tentative_max_coast=1 / 30)
+    lenient = track_detections(_frames({0: a}, 12), lenient_config)
     assert next(k for k, tf in enumerate(lenient) if len(tf)) == 4
+    # with backfill the confirmed track is written from its birth (4, resp. 0); the strict
+    # run's tracks born at 0 and 2 were never confirmed and leave no rows
+    for config, born in ((strict_config, 4), (lenient_config, 0)):
+        filled = track_detections(_frames({0: a}, 12), config.replace(backfill=True))
+        assert filled.track_ids.tolist() == [1]
+        assert [k for k, tf in enumerate(filled) if len(tf)] == list(range(born, 12))
+
+
+def test_backfill_changes_nothing_but_the_early_rows() -> None:
+    rng = np.random.default_rng(5)
+    frames = _random_scene(rng, 15, 30)
+    online = track_detections(frames, TrackerConfig(backfill=False)).to_mot()
+    filled = track_detections(frames, TrackerConfig()).to_mot()
+    # every online row is there unchanged; the extra rows precede their track's first
+    # online row
+    key = [tuple(r) for r in filled[:, :6]]
+    assert {tuple(r) for r in online[:, :6]} <= set(key)
+    first = {int(i): online[online[:, 1] == i, 0].min() for i in np.unique(online[:, 1])}
+    extra = [r for r in filled if tuple(r[:6]) not in {tuple(o) for o in online[:, :6]}]
+    assert extra and all(r[0] < first[int(r[1])] for r in extra)
 
 
 def _random_scene(rng: np.random.Generator, n_targets: int, n_frames: int):
@@ -180,7 +202,8 @@ def test_rows_link_to_the_detection_they_used() -> None:
         linked = tf.det_index >= 0
         n_linked += int(linked.sum())
         np.testing.assert_array_equal(tf.measured_xy[linked], dets.xy[tf.det_index[linked]])
-        assert np.all(tf.state[linked] == TrackState.CONFIRMED)
+        # rows with a detection: confirmed, or tentative then (backfilled)
+        assert np.all(np.isin(tf.state[linked], [TrackState.CONFIRMED, TrackState.TENTATIVE]))
         assert np.all(tf.state[~linked] == TrackState.COASTING)
         assert np.isnan(tf.measured_xy[~linked]).all()
         # one detection per track under exclusive assignment

@@ -144,6 +144,11 @@ class TrackerConfig:
         seconds without a detection; it stays alive (and can be associated again) for
         ``max_coast``. A short gap is usually a missed detection of a target still there,
         a long one more often a target that has left; ``None`` outputs every coasting row.
+    backfill : bool
+        Offline runs only (:func:`~mvtrack.tracking.track_detections`): once a track is
+        confirmed, the rows of its tentative frames — from its first detection on — are
+        written too, with its public ID; tracks never confirmed leave no rows. An online
+        :meth:`Tracker.step` cannot change frames it has already returned and ignores it.
     """
 
     predictor: str = "kalman-cv"
@@ -173,6 +178,7 @@ class TrackerConfig:
     size_ref: float | None = 50.0
     coast_output: float | None = 0.08
     size_weight: float = 0.5
+    backfill: bool = True
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -199,6 +205,8 @@ class TrackerConfig:
             and self.coast_output >= 0
         ):
             raise bad("coast_output", "must be a finite number of seconds >= 0 or None")
+        if not isinstance(self.backfill, bool):
+            raise bad("backfill", "must be True or False")
         w = self.size_weight
         if not isinstance(w, (int, float)) or not (0.0 <= w < 1.0):
             raise bad("size_weight", "must be a number in [0, 1)")
@@ -339,7 +347,9 @@ def default(fps: float = 30.0) -> TrackerConfig:
     from the last measurement) for established targets that turned or bounced. σ_z, the
     gates and the recovery margin hold for boxes up to 50 px and stretch per axis with larger
     boxes (``size_ref``). Confirmation on 2 consecutive hits; a track coasts up to 0.3 s but
-    its coasting rows are output only for the first 0.08 s (``coast_output``)."""
+    its coasting rows are output only for the first 0.08 s (``coast_output``). Offline runs
+    (:func:`~mvtrack.tracking.track_detections`) write a confirmed track from its first
+    detection on (``backfill``)."""
     return TrackerConfig(fps=fps)
 
 

@@ -98,3 +98,42 @@ class TrackLog:
         from mvtrack.io.mot import write_results
 
         write_results(dest, self.to_mot(include_coasting))
+
+
+def backfill(frames: list[TrackFrame], uids: list[NDArray[np.int64]]) -> list[TrackFrame]:
+    """Give the tentative rows of every track that was confirmed later its public ID.
+
+    Parameters
+    ----------
+    frames : list of TrackFrame
+        A run's output with tentative rows included (``track_id == -1``).
+    uids : list of (K,) int64
+        The tracker's internal uid of every row of ``frames`` (:attr:`Tracker.row_uids`),
+        aligned with them.
+
+    Returns
+    -------
+    list of TrackFrame
+        The same frames in which the rows of tracks confirmed at some point carry that
+        track's public ID from its first row on (their ``state`` stays ``TENTATIVE``), and the
+        rows of tracks never confirmed are left out.
+    """
+    all_uids = np.concatenate(uids) if uids else np.zeros(0, dtype=np.int64)
+    all_tids = (
+        np.concatenate([f.track_id for f in frames]) if frames else np.zeros(0, dtype=np.int64)
+    )
+    public = all_tids > 0
+    tid_of = np.full(int(all_uids.max()) + 1 if all_uids.size else 0, -1, dtype=np.int64)
+    tid_of[all_uids[public]] = all_tids[public]  # a track's ID never changes once given
+    out = []
+    for f, u in zip(frames, uids, strict=True):
+        if not np.count_nonzero(f.track_id <= 0):
+            out.append(f)
+            continue
+        tid = tid_of[u]
+        keep = (tid > 0).nonzero()[0]
+        out.append(TrackFrame(
+            f.frame, tid[keep], f.state[keep], f.det_index[keep], f.measured_xy[keep],
+            f.filtered_xy[keep], f.predicted_xy[keep], f.wh[keep], f.velocity[keep],
+        ))
+    return out

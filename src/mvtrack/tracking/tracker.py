@@ -56,7 +56,7 @@ from mvtrack.tracking.lifecycle import (
     hand_out_ids,
     next_state,
 )
-from mvtrack.tracking.log import TrackLog
+from mvtrack.tracking.log import TrackLog, backfill
 from mvtrack.types import Detections, TrackFrame
 
 FloatArray = NDArray[np.float64]
@@ -679,10 +679,15 @@ def track_detections(
     """Run a fresh :class:`Tracker` over ``frames`` (one :class:`Detections` per frame).
 
     Frames must come in increasing order; a frame index that skips ahead is filled with empty
-    frames so that the predictors advance one step per frame.
+    frames so that the predictors advance one step per frame. With ``config.backfill`` (and
+    without ``output_tentative``) a confirmed track's rows start at its first detection
+    (:func:`mvtrack.tracking.log.backfill`).
     """
-    tracker = Tracker(config)
-    log = TrackLog()
+    config = TrackerConfig() if config is None else config
+    late = isinstance(config, TrackerConfig) and config.backfill and not config.output_tentative
+    tracker = Tracker(config.replace(output_tentative=True) if late else config)
+    out: list[TrackFrame] = []
+    uids: list[IntArray] = []
     last = None
     for dets in frames:
         if last is not None:
@@ -691,7 +696,12 @@ def track_detections(
                     f"track_detections: frame {dets.frame} does not follow frame {last}"
                 )
             for f in range(last + 1, dets.frame):
-                log.append(tracker.step(Detections.empty(f), rescue))
-        log.append(tracker.step(dets, rescue))
+                out.append(tracker.step(Detections.empty(f), rescue))
+                uids.append(tracker.row_uids)
+        out.append(tracker.step(dets, rescue))
+        uids.append(tracker.row_uids)
         last = dets.frame
+    log = TrackLog()
+    for tf in backfill(out, uids) if late else out:
+        log.append(tf)
     return log
