@@ -53,8 +53,10 @@ DENSE_CONFLICT = 10_000
 
 _EMPTY = np.zeros(0, dtype=np.intp)
 
-#: the box-size term of the cost: ``(track wh (N, 2), detection wh (M, 2), weight)``
-SizeTerm = tuple[FloatArray, FloatArray, float]
+#: the box-size term of the cost: ``(track wh (N, 2), detection wh (M, 2), weight)``, and
+#: optionally a fourth element, the size gate ``ρ > 1`` (pairs whose widths or heights differ
+#: by more than the factor ``ρ`` are not gated)
+SizeTerm = tuple[FloatArray, FloatArray, float] | tuple[FloatArray, FloatArray, float, float]
 
 #: the 3 × 3 block of grid cells around a cell
 _NEIGHBOURS = np.array([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=np.int64)
@@ -87,8 +89,21 @@ def _isolated(ok: NDArray[np.bool_]) -> tuple[IntArray, IntArray] | None:
 
 def _size_matrix(size: SizeTerm, scale: FloatArray | None) -> FloatArray:
     """Unweighted size term ``Δwᵀ diag(scale)⁻¹ Δw`` of every track × detection pair."""
-    twh, dwh, _ = size
+    twh, dwh = size[0], size[1]
     return _cost(dwh[:, 0] - twh[:, 0, None], dwh[:, 1] - twh[:, 1, None], scale)
+
+
+def _size_apart(
+    size: SizeTerm | None, twh: FloatArray, dwh: FloatArray
+) -> NDArray[np.bool_] | None:
+    """Pairs whose boxes differ by more than the size gate ``size[3]`` in width or height
+    (``twh``, ``dwh`` broadcast against each other: a matrix or aligned pairs); ``None``
+    without a size gate."""
+    if size is None or len(size) < 4:
+        return None
+    rho = size[3]
+    big = np.maximum(twh, dwh)
+    return (big > rho * np.minimum(twh, dwh)).any(axis=-1)
 
 
 def _add_size(cost: FloatArray, s: FloatArray, weight: float, cap: float) -> FloatArray:
@@ -118,6 +133,9 @@ def gate_pairs(
         return _EMPTY, _EMPTY, np.zeros(0)
     if n * m <= DENSE_GATE:
         cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
+        apart = _size_apart(size, size[0][:, None], size[1][None]) if size else None
+        if apart is not None:
+            cost[apart] = np.inf
         ti, dj = np.nonzero(cost <= gate)
         return ti, dj, _pair_size(ti, dj, cost[ti, dj], scale, gate, size)
     if scale is None:
@@ -133,6 +151,10 @@ def gate_pairs(
     d = dxy.take(dj, 0) - txy.take(ti, 0)
     cost = _cost(d[:, 0], d[:, 1], None if scale is None else scale.take(ti, 0))
     keep = cost <= gate
+    if size is not None:
+        apart = _size_apart(size, size[0].take(ti, 0), size[1].take(dj, 0))
+        if apart is not None:
+            keep &= ~apart
     ti, dj = ti.compress(keep), dj.compress(keep)
     return ti, dj, _pair_size(ti, dj, cost.compress(keep), scale, gate, size)
 
@@ -144,7 +166,7 @@ def _pair_size(
     """``cost`` of the pairs plus their size term (:func:`gate_pairs`)."""
     if size is None or ti.size == 0:
         return cost
-    twh, dwh, weight = size
+    twh, dwh, weight = size[0], size[1], size[2]
     d = dwh.take(dj, 0) - twh.take(ti, 0)
     s = _cost(d[:, 0], d[:, 1], None if scale is None else scale.take(ti, 0))
     return _add_size(cost, s, weight, gate)
@@ -234,6 +256,9 @@ def dense_optimal(
     constant). ``size`` as in :func:`gate_pairs`. Returns matched (track, detection) rows.
     """
     cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
+    apart = _size_apart(size, size[0][:, None], size[1][None]) if size else None
+    if apart is not None:
+        cost[apart] = np.inf
     ok = cost <= gate  # NaN never passes
     pairs = _isolated(ok)
     if pairs is not None:
@@ -265,8 +290,11 @@ def dense_two_stage(
     dx = dxy[:, 0] - txy[:, 0, None]
     dy = dxy[:, 1] - txy[:, 1, None]
     cost = _cost(dx, dy, scale)  # eq. (8) of paper 2, squared (over S)
+    apart = _size_apart(size, size[0][:, None], size[1][None]) if size else None
+    if apart is not None:  # both stages (d2 below is cost, or masked again)
+        cost[apart] = np.inf
     plain = scale is None and scale2 is None
-    d2 = cost.copy() if plain else None  # the second stage's costs
+    d2 = cost if plain else None  # the second stage's costs (copied before cost changes)
     ok = cost <= gate  # NaN never passes
     s = None
     pairs = _isolated(ok)
@@ -276,6 +304,8 @@ def dense_two_stage(
         if size is not None:
             s = _size_matrix(size, scale2)
             cost = _add_size(cost, s, size[2], gate)
+        elif d2 is not None:
+            cost = cost.copy()
         u = 2.0 * gate
         cost[~ok] = u
         rows, cols = linear_sum_assignment(cost)
@@ -296,6 +326,8 @@ def dense_two_stage(
     else:
         sub = _cost(dx.take(lt, 0).take(ld, 1), dy.take(lt, 0).take(ld, 1),
                     None if scale2 is None else scale2.take(lt, 0))
+        if apart is not None:
+            sub[apart.take(lt, 0).take(ld, 1)] = np.inf
     ok = sub <= gate2
     if not np.count_nonzero(ok):
         return rows, cols, ld
@@ -376,9 +408,11 @@ def _solve_conflicts(
     nd, ld = _compact(d, m)
     p = t.size
     if nt * nd <= DENSE_CONFLICT:
-        a = np.full((nt, nd), 2.0 * half_u)  # forbidden = leave both unmatched
+        a = np.empty((nt, nd))
+        a.fill(2.0 * half_u)  # forbidden = leave both unmatched
         a[lt, ld] = c
-        pos = np.full((nt, nd), -1, dtype=np.intp)
+        pos = np.empty((nt, nd), dtype=np.intp)
+        pos.fill(-1)
         pos[lt, ld] = np.arange(p)
         rows, cols = linear_sum_assignment(a)
         got = pos[rows, cols]

@@ -176,6 +176,22 @@ def _take_state(state: Any, idx: NDArray[np.intp] | slice) -> Any:
     return _batch.take(state, idx)
 
 
+def _kept_rows(delete: BoolArray) -> NDArray[np.intp] | slice:
+    """The rows not in ``delete``: a slice when they are the first ones (only the last rows
+    end, as when last frame's false alarms end), else their indices."""
+    keep = (~delete).nonzero()[0]
+    if keep.size == 0 or keep[-1] == keep.size - 1:
+        return slice(0, keep.size)
+    return keep
+
+
+def _uid_ramp(b: int) -> IntArray:
+    """(b, 8) int64: 0, 1, ..., b − 1 in the uid column, 0 elsewhere (added to a birth row)."""
+    ramp = np.zeros((b, N_INT), dtype=np.int64)
+    ramp[:, UID] = np.arange(b)
+    return ramp
+
+
 def _detection_rows(dets: Detections) -> FloatArray:
     """(M + 1, 4): each detection's ``x, y, w, h``, then a row of NaN (the one index −1 takes,
     so that one ``take`` by a track's detection index also fills the tracks without one)."""
@@ -294,6 +310,8 @@ class Tracker:
         # box-size term of the Euclidean costs (in the units of the position cost)
         self._size_w = float(self.config.size_weight) if self._fast_gate == "euclidean" else 0.0
         self._birth_row = np.array([0, -1, TENTATIVE, 1, 0, 1, 0, 0], dtype=np.int64)
+        self._uid_ramp = _uid_ramp(16)
+        self._recover_hits = max(self.config.recover_min_hits, self._fp.confirm_hits)
         self.reset()
 
     def reset(self) -> None:
@@ -433,9 +451,7 @@ class Tracker:
             out_uid = oi[:, UID]
             tab = TrackTable(ints, flo)
             if np.count_nonzero(delete):
-                keep = (~delete).nonzero()[0]
-                if keep.size == 0 or keep[-1] == keep.size - 1:  # only the last rows end
-                    keep = slice(0, keep.size)
+                keep = _kept_rows(delete)
                 tab = tab.take(keep)
                 ps = _take_state(ps, keep)
         born = None
@@ -553,7 +569,7 @@ class Tracker:
         cand = (
             (det_index < 0)
             # established: tentative tracks always have fewer than confirm_hits hits
-            & (ints[:, HITS] >= max(self.config.recover_min_hits, self._fp.confirm_hits))
+            & (ints[:, HITS] >= self._recover_hits)
             & (ints[:, LAST_K] >= k - self._fp.recover_window)
         ).nonzero()[0]
         if cand.size == 0:
@@ -644,17 +660,17 @@ class Tracker:
         else:
             new_ps = self.predictor.init(xy)
         row = self._birth_row  # uid, track_id, state, hits, misses, age, last_k, prev_k
-        row[LAST_K:] = k
-        ints = np.empty((b, N_INT), dtype=np.int64)
-        ints[:] = row
-        ints[:, UID] = np.arange(self._next_uid, self._next_uid + b)
+        row[UID] = self._next_uid
+        row[LAST_K] = row[PREV_K] = k
+        if b > self._uid_ramp.shape[0]:
+            self._uid_ramp = _uid_ramp(2 * b)
+        ints = row + self._uid_ramp[:b]  # uids next_uid, next_uid + 1, ...
         self._next_uid += b
         one = self._fp.confirm_hits <= 1
         if one:  # confirmed by their first detection: public IDs now
             ints[:, STATE] = CONFIRMED
             ints[:, TID] = np.arange(self._next_id, self._next_id + b)
             self._next_id += b
-        new = TrackTable(ints, floats)
         born = None
         if one or self.config.output_tentative:
             born = (
@@ -663,11 +679,9 @@ class Tracker:
                 self.predictor.velocity(new_ps),
             )
         uid = ints[:, UID]
-        if len(tab) == 0:
-            return new, new_ps, born, uid
-        tab = TrackTable(
-            np.concatenate([tab.ints, new.ints]), np.concatenate([tab.floats, new.floats])
-        )
+        if tab.ints.shape[0] == 0:
+            return TrackTable(ints, floats), new_ps, born, uid
+        tab = TrackTable(np.concatenate([tab.ints, ints]), np.concatenate([tab.floats, floats]))
         return tab, _concat_state(ps, new_ps), born, uid
 
 
