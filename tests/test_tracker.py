@@ -416,3 +416,33 @@ def test_size_term_gives_the_small_box_to_the_small_track(weight, small_takes) -
     by_id = dict(zip(out.track_id.tolist(), out.det_index.tolist(), strict=True))
     assert sorted(by_id) == [1, 2]  # track 1 is the small box (born first: lower x)
     assert by_id[1] == small_takes and by_id[2] == 1 - small_takes
+
+
+def test_size_gate_keeps_a_box_of_another_size_from_a_track() -> None:
+    # a 100 × 200 px person walks right; from frame 12 on only a 40 × 90 px box is detected
+    # 3 px from its path (someone else, farther away): with the size gate a new track starts.
+    # The box is inside the first gate and the recovery radius: every stage must refuse it.
+    n = 20
+    xy = _line([300.0, 200.0], [2.0, 0.0], n)
+    frames = []
+    for k in range(n):
+        small = k >= 12
+        p = xy[k] + (3.0 if small else 0.0, 0.0)
+        wh = [[40.0, 90.0]] if small else [[100.0, 200.0]]
+        frames.append(Detections(k, p[None], np.array(wh)))
+    config = TrackerConfig(fps=25.0)
+    assert track_detections(frames, config).track_ids.tolist() == [1]
+    gated = track_detections(frames, config.replace(size_gate=2.0))
+    assert gated.track_ids.tolist() == [1, 2]
+    assert gated[n - 1].track_id.tolist() == [2]
+    np.testing.assert_allclose(gated[n - 1].wh, [[40.0, 90.0]])
+    # a ratio of 2 or less still passes: the same run with a 60 × 120 px box keeps one ID
+    for tf in frames[12:]:
+        tf.wh[:] = [60.0, 120.0]
+    assert track_detections(frames, config.replace(size_gate=2.0)).track_ids.tolist() == [1]
+
+
+def test_size_gate_must_be_a_ratio_above_one() -> None:
+    with pytest.raises(ValueError, match="size_gate"):
+        TrackerConfig(size_gate=1.0)
+    assert TrackerConfig().size_gate is None

@@ -351,3 +351,48 @@ def test_many_births_in_one_frame_get_consecutive_uids() -> None:
     np.testing.assert_array_equal(np.sort(tracker.tracks.uid), np.arange(40, 90))
     assert (tracker.tracks.last_k == 1).all() and (tracker.tracks.prev_k == 1).all()
     assert (tracker.tracks.hits == 1).all() and (tracker.tracks.track_id == -1).all()
+
+
+@pytest.mark.parametrize("n, m", [(6, 7), (100, 97), (900, 880)])  # dense, band, grid gating
+def test_gate_pairs_size_gate_drops_exactly_the_pairs_of_another_size(n, m) -> None:
+    rng = np.random.default_rng(n + 1)
+    txy, dxy = _scene(rng, n, m, 12.0 * np.sqrt(n))
+    f2 = rng.uniform(1.0, 4.0, (n, 2))
+    twh, dwh = rng.uniform(10, 60, (n, 2)), rng.uniform(10, 60, (m, 2))
+    ti, dj, sized = fa.gate_pairs(txy, dxy, f2, 100.0, (twh, dwh, 0.3))
+    gi, gj, gated = fa.gate_pairs(txy, dxy, f2, 100.0, (twh, dwh, 0.3, 2.0))
+    ratio = np.maximum(dwh[dj] / twh[ti], twh[ti] / dwh[dj]).max(axis=1)
+    same = ratio <= 2.0
+    assert same.any() and not same.all()
+    np.testing.assert_array_equal(gi, ti[same])  # the others are left untouched
+    np.testing.assert_array_equal(gj, dj[same])
+    np.testing.assert_allclose(gated, sized[same])
+
+
+@pytest.mark.parametrize("stretch", [False, True])
+def test_dense_stages_with_a_size_gate_equal_sparse_gating(stretch: bool) -> None:
+    rng = np.random.default_rng(9)
+    for _ in range(20):
+        txy, dxy = _scene(rng, 30, 33, 120.0)
+        f2 = rng.uniform(1.0, 6.0, (30, 2)) if stretch else None
+        twh, dwh = rng.uniform(10, 60, (30, 2)), rng.uniform(10, 60, (33, 2))
+        size = (twh, dwh, 0.5, 1.8)
+        t1, d1 = fa.optimal(*fa.gate_pairs(txy, dxy, f2, 25.0, size), 30, 33, 25.0)
+        o1, p1 = fa.dense_optimal(txy, dxy, f2, 25.0, size)
+        assert set(zip(o1.tolist(), p1.tolist(), strict=True)) == set(
+            zip(t1.tolist(), d1.tolist(), strict=True)
+        )
+        mt, md, _ = fa.dense_two_stage(txy, dxy, f2, 25.0, 144.0, f2, size)
+        lt = np.setdiff1d(np.arange(30), t1)
+        ld = np.setdiff1d(np.arange(33), d1)
+        size2 = (twh[lt], dwh[ld], 0.5, 1.8)
+        t2, d2 = fa.optimal(
+            *fa.gate_pairs(txy[lt], dxy[ld], None if f2 is None else f2[lt], 144.0, size2),
+            lt.size, ld.size, 144.0,
+        )
+        want = set(zip(t1.tolist(), d1.tolist(), strict=True)) | set(
+            zip(lt[t2].tolist(), ld[d2].tolist(), strict=True)
+        )
+        assert set(zip(mt.tolist(), md.tolist(), strict=True)) == want
+        ratio = np.maximum(dwh[md] / twh[mt], twh[mt] / dwh[md]).max(axis=1)
+        assert (ratio <= 1.8).all()

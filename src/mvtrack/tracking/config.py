@@ -144,6 +144,13 @@ class TrackerConfig:
         seconds without a detection; it stays alive (and can be associated again) for
         ``max_coast``. A short gap is usually a missed detection of a target still there,
         a long one more often a target that has left; ``None`` outputs every coasting row.
+    size_gate : float or None
+        A ratio > 1. With the ``euclidean`` distance (every association stage, recovery
+        included), a track and a detection whose box widths or heights differ by more than
+        this factor (``w_d > ρ w_t`` or ``w_t > ρ w_d``, the same for ``h``; ``wh`` of the
+        track the smoothed one) are never paired, however close: a box twice or half the
+        size is another object (a person nearer or farther away, or a different one), the
+        consistency that the overlap enforces in IoU association. ``None`` disables it.
     backfill : bool
         Offline runs only (:func:`~mvtrack.tracking.track_detections`): once a track is
         confirmed, the rows of its tentative frames — from its first detection on — are
@@ -178,6 +185,7 @@ class TrackerConfig:
     size_ref: float | None = 50.0
     coast_output: float | None = 0.08
     size_weight: float = 0.5
+    size_gate: float | None = None
     backfill: bool = True
 
     def __post_init__(self) -> None:
@@ -205,6 +213,11 @@ class TrackerConfig:
             and self.coast_output >= 0
         ):
             raise bad("coast_output", "must be a finite number of seconds >= 0 or None")
+        g = self.size_gate
+        if g is not None and not (
+            isinstance(g, (int, float)) and math.isfinite(g) and g > 1.0
+        ):
+            raise bad("size_gate", "must be a finite ratio > 1 or None")
         if not isinstance(self.backfill, bool):
             raise bad("backfill", "must be True or False")
         w = self.size_weight

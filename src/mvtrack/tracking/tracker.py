@@ -309,6 +309,11 @@ class Tracker:
         self._scale_r = self._inv_ref2 is not None and isinstance(self.predictor, FastCVPredictor)
         # box-size term of the Euclidean costs (in the units of the position cost)
         self._size_w = float(self.config.size_weight) if self._fast_gate == "euclidean" else 0.0
+        # size gate of the Euclidean stages (config.size_gate)
+        sgate = self.config.size_gate
+        self._size_gate = (
+            float(sgate) if sgate is not None and self._fast_gate == "euclidean" else None
+        )
         self._birth_row = np.array([0, -1, TENTATIVE, 1, 0, 1, 0, 0], dtype=np.int64)
         self._uid_ramp = _uid_ramp(16)
         self._recover_hits = max(self.config.recover_min_hits, self._fp.confirm_hits)
@@ -501,7 +506,7 @@ class Tracker:
         the Euclidean cost, ``config.size_weight``)."""
         n, m = gxy.shape[0], dets.xy.shape[0]
         scale = f2
-        size = (twh, dets.wh, self._size_w) if self._size_w else None
+        size = self._size_term(twh, dets.wh)
         if self._fast_gate == "mahalanobis":
             r = self.predictor.r if r_rows is None else r_rows
             scale = self.predictor.position_var(ps) + r  # S = (P̄ + r) I
@@ -539,7 +544,7 @@ class Tracker:
         g = self._gate2
         scale = None if f2 is None else f2.take(cand, 0)
         left = drow.take(ud, 0)
-        size = (twh.take(cand, 0), left[:, 2:], self._size_w) if self._size_w else None
+        size = self._size_term(twh.take(cand, 0), left[:, 2:])
         txy, dxy = gxy.take(cand, 0), left[:, :2]
         if cand.size * ud.size <= fast_assoc.DENSE_LSA:  # the same result, one dense solve
             mt, md = fast_assoc.dense_optimal(txy, dxy, scale, g, size)
@@ -579,14 +584,26 @@ class Tracker:
             margin = margin * np.sqrt(self._r_factor(f2[cand]))
         radius = self._fp.recover_speed * (k - ints.take(cand, 0)[:, LAST_K]) + margin
         r2 = radius * radius
-        last_xy = tab.floats.take(cand, 0)[:, LAST_XY]
-        dxy = drow.take(ud, 0)[:, :2]
+        tf = tab.floats.take(cand, 0)
+        last_xy = tf[:, LAST_XY]
+        left = drow.take(ud, 0)
+        dxy = left[:, :2]
+        size = None  # the size gate only (no size term in this cost)
+        if self._size_gate is not None:
+            size = (tf[:, WH], left[:, 2:], 0.0, self._size_gate)
         if cand.size * ud.size <= fast_assoc.DENSE_LSA:
-            mt, md = fast_assoc.dense_optimal(last_xy, dxy, r2, 1.0)
+            mt, md = fast_assoc.dense_optimal(last_xy, dxy, r2, 1.0, size)
         else:
-            ti, dj, cost = fast_assoc.gate_pairs(last_xy, dxy, r2, 1.0)
+            ti, dj, cost = fast_assoc.gate_pairs(last_xy, dxy, r2, 1.0, size)
             mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
         return cand[mt], ud[md]
+
+    def _size_term(self, twh: FloatArray, dwh: FloatArray) -> fast_assoc.SizeTerm | None:
+        """The size term (``size_weight``) and size gate (``size_gate``) of a Euclidean stage
+        for tracks of box sizes ``twh`` against detections of sizes ``dwh``, or ``None``."""
+        if self._size_gate is not None:
+            return (twh, dwh, self._size_w, self._size_gate)
+        return (twh, dwh, self._size_w) if self._size_w else None
 
     def _size_scale2(self, wh: FloatArray) -> FloatArray:
         """Per-axis size factors squared, ``(f_x², f_y²) = max(1, (w, h)² / size_ref²)``, (N, 2)
