@@ -343,3 +343,53 @@ def test_blobs_labelled_band_by_band_equal_those_of_the_whole_mask() -> None:
         np.testing.assert_allclose(ours[np.lexsort(ours.T[::-1])], ref[np.lexsort(ref.T[::-1])])
         kept = blobs_from_mask(m, 0, min_area=4, max_area=20)
         assert len(kept) == int(((stats[1:, 4] >= 4) & (stats[1:, 4] <= 20)).sum())
+
+
+@pytest.mark.parametrize(("open_size", "close_size"), [(3, 7), (3, 5), (0, 7), (3, 0), (5, 9)])
+def test_opening_and_closing_group_by_group_equal_those_of_the_whole_mask(
+    open_size: int, close_size: int
+) -> None:
+    """The blob stage opens and closes only around separate groups of rows of the eroded
+    mask; the result must be the opening and closing of the whole image, whether the groups
+    lie far apart, just far enough apart or close together, and at the image border."""
+    rng = np.random.default_rng(open_size * 10 + close_size)
+    extractor = BlobExtractor(open_size=open_size, close_size=close_size)
+    for trial in range(60):
+        h, w = int(rng.integers(60, 300)), int(rng.integers(20, 120))
+        m = np.zeros((h, w), np.uint8)
+        y = int(rng.integers(-3, 10))
+        while y < h:  # blobs stacked downwards with gaps of 0 to 40 rows
+            dh, dw = rng.integers(1, 15, 2)
+            x = int(rng.integers(-3, w))
+            m[max(y, 0) : y + dh, max(x, 0) : x + dw] = 255
+            y += int(dh) + int(rng.integers(0, 40))
+        if trial % 2:
+            m[rng.random((h, w)) < 0.03] = 255
+        ref = m
+        if open_size > 1:
+            rect = cv2.getStructuringElement(cv2.MORPH_RECT, (open_size, open_size))
+            ref = cv2.morphologyEx(ref, cv2.MORPH_OPEN, rect)
+        if close_size > 1:
+            ellipse = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_size, close_size))
+            ref = cv2.morphologyEx(ref, cv2.MORPH_CLOSE, ellipse)
+        np.testing.assert_array_equal(extractor.clean(m), ref)
+
+
+@pytest.mark.parametrize("threshold", [25.0, 25.3, 7.77])
+def test_disturbance_mask_is_the_float32_difference_above_the_threshold(threshold: float) -> None:
+    """|I_k − B_{k−1}| > T on the float32 background, also for a T that float32 cannot hold
+    exactly, as a 0/255 mask; a threshold changed between frames takes effect."""
+    rng = np.random.default_rng(3)
+    dm = DisturbanceMap(threshold=threshold, open_size=0, min_area=1)
+    for k in range(12):
+        if k == 8:
+            dm.threshold = threshold + 10.0
+        img = rng.integers(0, 256, (30, 40, 3), dtype=np.uint8)
+        grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float32)
+        before = None if dm.background is None else dm.background.copy()
+        dm(img)
+        if before is None:
+            continue
+        ref = np.abs(grey - before) > np.float32(dm.threshold)
+        assert set(np.unique(dm.raw_mask).tolist()) <= {0, 255}
+        np.testing.assert_array_equal(dm.raw_mask > 0, ref, err_msg=f"k={k}")

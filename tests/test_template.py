@@ -399,3 +399,42 @@ def test_build_rescuer_gives_the_bank_the_detectors_mask_and_min_pixels() -> Non
         RunSettings(template_params={"min_travel": 2.0, "min_travel_px": 15}), tracker
     ).inner.bank
     assert (bank.min_travel, bank.min_travel_px) == (2.0, 15.0)
+
+
+def test_per_track_eligibility_check_agrees_with_the_array_form() -> None:
+    """The search checks the travel guard track by track in plain floats; it must agree with
+    the array form behind ``eligible`` on every row."""
+    rng = np.random.default_rng(11)
+    for min_travel, min_travel_px, min_hits in [(1.0, 10.0, 5), (0.0, 3.0, 0), (2.0, 0.0, 2)]:
+        bank = TemplateBank(min_travel=min_travel, min_travel_px=min_travel_px, min_hits=min_hits)
+        f = bank._empty_rows(400)
+        f[:, 0:11] = rng.uniform(0, 40, (400, 11))
+        f[:, 12] = rng.integers(0, 9, 400)
+        f[:50, 6:8] = f[:50, 9:11]  # no travel at all
+        want = bank._eligible_rows(f)
+        assert 0 < want.sum() < 400
+        assert [bank._eligible_row(row) for row in f.tolist()] == want.tolist()
+
+
+def test_search_prefilter_skips_leaving_drifting_and_unknown_tracks() -> None:
+    """The missed tracks that are unknown, predicted with their box outside the image, or
+    (with ``max_drift``) predicted far from their last place get no search (NaN score)."""
+    tl = (50, 40)
+    bank = TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, max_drift=None)
+    other = [130.0, 100.0]
+    bank.observe(_frame(tl, seed=1), [7, 8], [_centre(tl), other], [[VW, VH], [VW, VH]])
+    frame = _frame(tl, seed=2)
+    uids = [7, 9, 8]  # 9 is unknown; 8 is predicted with its box past the right border
+    pred = [_centre(tl) + 1.0, _centre(tl), [155.0, 100.0]]
+    found, xy, score = bank.rescue(frame, uids, pred)
+    assert found.tolist() == [True, False, False]
+    assert np.isfinite(score[0]) and np.isnan(score[1:]).all()
+    np.testing.assert_allclose(xy[0], _centre(tl), atol=0.01)
+    assert np.isnan(xy[1:]).all()
+    found, _, score = bank.rescue(frame, [8], [[128.0, 100.0]])  # inside: searched
+    assert np.isfinite(score[0])
+    found, _, score = bank.rescue(frame, [7], [[np.nan, np.nan]])  # no prediction
+    assert not found[0] and np.isnan(score[0])
+    bank.max_drift = 5.0
+    found, _, score = bank.rescue(frame, [7, 8], [_centre(tl) + 1.0, [121.0, 100.0]])
+    assert found.tolist() == [True, False] and np.isnan(score[1])  # 8 drifted 9 px

@@ -92,26 +92,58 @@ class BlobExtractor:
         self._open = _kernel(self.open_size, cv2.MORPH_RECT)
         self._close = _kernel(self.close_size, cv2.MORPH_ELLIPSE)
         self._buf: NDArray[np.uint8] | None = None
+        self._eroded: NDArray[np.uint8] | None = None
         self.mask: NDArray[np.uint8] | None = None
 
     def clean(self, mask: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """Opening (SPEC §1.1 [R]) then the optional closing; returns a reused buffer."""
+        """Opening (SPEC §1.1 [R]) then the optional closing; returns a reused buffer.
+
+        The opening is an erosion of the whole mask followed by a dilation, and the closing
+        a dilation followed by an erosion; after the first erosion both are computed only
+        around what survived it, group by group. A group is a run of rows of the eroded mask
+        whose non-empty rows lie less than ``2 (a + m)`` rows apart (``a`` the radius of the
+        opening, ``m = 2 r + 1`` for a closing of radius ``r``); its rectangle is its
+        bounding rectangle widened by ``a + m``, so the rectangles are disjoint. Inside a
+        rectangle the dilation sees all the eroded pixels within its reach, and the closing
+        of a mask that is empty outside its bounding rectangle B, computed on B widened by
+        ``m``, equals the closing of the whole image (the dilation stays within ``r`` of B,
+        and the erosion of the empty margin beyond it is empty). The groups' opened masks are
+        more than ``2 m`` empty rows apart, so their dilations are separated by empty rows,
+        which the erosion of the closing cannot bridge: closing the groups one by one equals
+        closing the whole mask (pinned by a test). The rest of the buffer is zero.
+        """
         if self._buf is None or self._buf.shape != mask.shape:
             self._buf = np.empty_like(mask)
+            self._eroded = np.empty_like(mask)
         out = self._buf
-        if self._open is not None:
-            cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._open, dst=out)  # SPEC §1.1: 3×3 opening
-        else:
+        if self._open is None and self._close is None:
             np.copyto(out, mask)
-        if self._close is not None:
-            # Only around the foreground: the closing of a mask that is empty outside its
-            # bounding rectangle B, computed on B widened by twice the kernel radius, equals
-            # the closing of the whole image (the dilation stays within one radius of B, and
-            # the erosion of the empty margin beyond it is empty).
-            x, y, w, h = cv2.boundingRect(out)
-            if w:
-                m = 2 * (self.close_size // 2) + 1
-                roi = out[max(y - m, 0) : y + h + m, max(x - m, 0) : x + w + m]
+            return out
+        if self._open is not None:  # SPEC §1.1: 3×3 opening, its erosion on the whole mask
+            seed = cv2.erode(mask, self._open, dst=self._eroded)
+            a = self.open_size // 2
+        else:
+            seed, a = mask, 0
+        reach = a + (2 * (self.close_size // 2) + 1 if self._close is not None else 0)
+        out.fill(0)
+        rows = np.flatnonzero(cv2.reduce(seed, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S))
+        if rows.size == 0:
+            return out
+        height, width = mask.shape
+        cut = np.flatnonzero((rows[1:] - rows[:-1]) > 2 * reach)
+        tops = [int(rows[0]), *rows[cut + 1].tolist()]
+        ends = [*rows[cut].tolist(), int(rows[-1])]
+        # a loop over the few groups of rows (one to a handful per frame), not over blobs
+        for r0, r1 in zip(tops, ends, strict=True):
+            x, _, w, _ = cv2.boundingRect(seed[r0 : r1 + 1])
+            y0, y1 = max(r0 - reach, 0), min(r1 + 1 + reach, height)
+            x0, x1 = max(x - reach, 0), min(x + w + reach, width)
+            roi = out[y0:y1, x0:x1]
+            if self._open is not None:
+                cv2.dilate(seed[y0:y1, x0:x1], self._open, dst=roi)
+            else:
+                np.copyto(roi, mask[y0:y1, x0:x1])
+            if self._close is not None:
                 cv2.morphologyEx(roi, cv2.MORPH_CLOSE, self._close, dst=roi)
         return out
 
@@ -121,9 +153,10 @@ class BlobExtractor:
             raise ValueError(f"mask must be a 2-D uint8 array, got {mask.dtype} {mask.shape}")
         clean = self.clean(mask)
         self.mask = clean
-        return blobs_from_mask(
+        return _blobs(
             clean,
             frame,
+            _bands(clean),
             min_area=self.min_area,
             max_area=self.max_area,
             connectivity=self.connectivity,
@@ -167,47 +200,76 @@ def blobs_from_mask(
     algorithm for 8-connectivity, the fastest of OpenCV's here, with 16-bit labels (about 30 %
     faster than 32-bit ones; 32-bit only for more than 65535 blobs).
     """
-    rows = cv2.reduce(mask, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel() > 0
-    edges = np.flatnonzero(np.diff(rows.view(np.int8), prepend=0, append=0))
-    if edges.size == 0:
-        return Detections.empty(frame)
-    bands = []  # (left, top, width, height) of each band's foreground
+    return _blobs(
+        mask,
+        frame,
+        _bands(mask),
+        min_area=min_area,
+        max_area=max_area,
+        connectivity=connectivity,
+        center=center,
+    )
+
+
+def _bands(mask: NDArray[np.uint8]) -> list[tuple[int, int, int, int]]:
+    """``(left, top, width, height)`` of the foreground of each band of rows of ``mask``
+    (maximal runs of rows with foreground), top to bottom."""
+    rows = np.zeros(mask.shape[0] + 2, bool)  # padded with an empty row at either end
+    np.greater(cv2.reduce(mask, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel(), 0, out=rows[1:-1])
+    edges = np.flatnonzero(rows[1:] != rows[:-1])  # first row and end of each band
+    bands = []
     for r0, r1 in edges.reshape(-1, 2).tolist():  # a loop over the few bands, not over blobs
         x, _, w, _ = cv2.boundingRect(mask[r0:r1])
         bands.append((x, r0, w, r1 - r0))
-    if len(bands) > 1:
-        b = np.array(bands)
-        left, right = int(b[:, 0].min()), int((b[:, 0] + b[:, 2]).max())
-        whole = (left, int(edges[0]), right - left, int(edges[-1] - edges[0]))
-        if int((b[:, 2] * b[:, 3]).sum()) > 0.6 * whole[2] * whole[3]:
-            bands = [whole]  # the bands would save little: one call
+    return bands
+
+
+def _blobs(
+    mask: NDArray[np.uint8],
+    frame: int,
+    bands: list[tuple[int, int, int, int]],
+    *,
+    min_area: float,
+    max_area: float | None,
+    connectivity: int,
+    center: str,
+) -> Detections:
+    """:func:`blobs_from_mask` given the foreground's bands (:func:`_bands`)."""
+    if not bands:
+        return Detections.empty(frame)
+    if len(bands) > 1:  # plain Python over the few bands: cheaper than arrays this small
+        left = min(b[0] for b in bands)
+        right = max(b[0] + b[2] for b in bands)
+        top, bottom = bands[0][1], bands[-1][1] + bands[-1][3]
+        if sum(b[2] * b[3] for b in bands) > 0.6 * (right - left) * (bottom - top):
+            bands = [(left, top, right - left, bottom - top)]  # the bands save little: one call
     stats, cents = [], []
+    box = center != "centroid"
     for x0, y0, w, h in bands:
         st, ce = _label(mask[y0 : y0 + h, x0 : x0 + w], connectivity)
-        stats.append(st[1:])  # row 0 is the background
-        cents.append(ce[1:])
-    if len(bands) == 1:
-        st, ce = stats[0].astype(np.float64), cents[0]
-        origin = np.array(bands[0][:2], np.float64)
-    else:
-        st, ce = np.concatenate(stats).astype(np.float64), np.concatenate(cents)
-        counts = [len(c) for c in cents]
-        origin = np.repeat(np.array(bands, np.float64)[:, :2], counts, axis=0)
-    # st: left, top, width, height, area (CC_STAT_*) inside the labelled rectangle
+        st, ce = st[1:], ce[1:]  # row 0 is the background
+        if box:  # left, top, width, height, area (CC_STAT_*) inside the rectangle: shift
+            st[:, 0:2] += (x0, y0)
+        else:  # two scalar additions: cheaper than adding a pair (converted to an array)
+            ce[:, 0] += x0
+            ce[:, 1] += y0
+        stats.append(st)
+        cents.append(ce)
+    st = stats[0] if len(stats) == 1 else np.concatenate(stats)
     area = st[:, cv2.CC_STAT_AREA]
     keep = area >= min_area
     if max_area is not None:
         keep &= area <= max_area
-    if not keep.all():
-        st, ce = st[keep], ce[keep]
-        if origin.ndim == 2:
-            origin = origin[keep]
-    if center == "centroid":
-        xy = ce + origin
-    else:
+    whole = keep.all()
+    f = (st if whole else st[keep]).astype(np.float64)
+    if box:
         # box centre with pixel centres on integers: l + (w − 1)/2
-        xy = st[:, 0:2] + origin + (st[:, 2:4] - 1.0) / 2.0
-    return Detections(frame, xy, st[:, 2:4], None, st[:, cv2.CC_STAT_AREA])
+        xy = f[:, 0:2] + (f[:, 2:4] - 1.0) / 2.0
+    else:
+        xy = cents[0] if len(cents) == 1 else np.concatenate(cents)
+        if not whole:
+            xy = xy[keep]
+    return Detections(frame, xy, f[:, 2:4], None, f[:, cv2.CC_STAT_AREA])
 
 
 def _label(

@@ -370,6 +370,13 @@ class TemplateBank:
         need = np.maximum(self.min_travel * np.maximum(f[:, 2], f[:, 3]), self.min_travel_px)
         return ((d * d).sum(axis=1) >= need * need) & (f[:, self._HITS] >= self.min_hits)
 
+    def _eligible_row(self, f: list[float]) -> bool:
+        """:meth:`_eligible_rows` of one row (a list), in plain float arithmetic."""
+        dx = f[6] - f[9]
+        dy = f[7] - f[10]
+        need = max(self.min_travel * max(f[2], f[3]), self.min_travel_px)
+        return dx * dx + dy * dy >= need * need and f[12] >= self.min_hits
+
     @property
     def eligible(self) -> BoolArray:
         """Per track in :attr:`uids`: far enough from its first detection, often enough seen."""
@@ -505,36 +512,45 @@ class TemplateBank:
             return found, out, score
         height, width = frame.shape[:2]
         pos, has = self._rows(uids)
-        f = self._f[pos]
-        has &= self._eligible_rows(f)  # tracks that have driven somewhere
-        if self.max_drift is not None:  # ... and have come to rest where last seen
-            d = pxy - f[:, self._LAST]
-            has &= (d * d).sum(axis=1) <= self.max_drift**2  # False for a NaN prediction
-        else:
-            has &= np.isfinite(pxy).all(axis=1)
-        # a box placed on the prediction that sticks out of the image: leaving, not stopped.
-        # The exact test (on the template) is in the loop; this bound of it, one row of array
-        # operations, spares the loop and the cutting of a template for leaving tracks.
-        half = (f[:, 2:4] - 1.0) / 2.0
-        shift = pxy - f[:, 0:2]
-        first = shift + np.maximum(f[:, 0:2] - half, 0.0)  # ≈ top-left of the placement
-        last = shift + np.minimum(f[:, 0:2] + half, (width, height))  # ≈ its end
-        has &= (first >= -1.0).all(axis=1) & (last <= (width + 0.5, height + 0.5)).all(axis=1)
-        if not has.any():
-            return found, out, score
         ri = math.floor(r)
         r2 = r * r
+        rows = self._f[pos].tolist()
         p_list = pxy.tolist()
-        # the only per-track loop: the few missed tracks that qualify, each one NCC of its
-        # template over a small window around its gate (one cv2 call on that region; there is
-        # no batched form of matchTemplate for templates and windows of different sizes)
+        max_drift2 = None if self.max_drift is None else self.max_drift**2
+        # the only per-track loop, over the missed (lost) tracks, a few per frame: the checks
+        # below are a handful of float operations each (cheaper in plain Python than array
+        # operations over so few rows), then one NCC of a template over a small window
+        # around its gate for those that qualify (one cv2 call on that region; there is no
+        # batched form of matchTemplate for templates and windows of different sizes)
         for j in np.flatnonzero(has).tolist():
+            f = rows[j]
+            if not self._eligible_row(f):  # tracks that have driven somewhere ...
+                continue
+            px, py = p_list[j]
+            bx, by, bw, bh = f[0:4]
+            if max_drift2 is not None:  # ... and have come to rest where last seen
+                dx, dy = px - f[4], py - f[5]
+                if not dx * dx + dy * dy <= max_drift2:  # False for a NaN prediction
+                    continue
+            elif not (math.isfinite(px) and math.isfinite(py)):
+                continue
+            # a box placed on the prediction that sticks out of the image: leaving, not
+            # stopped. The exact test (on the template) follows; this bound of it spares the
+            # cutting of a template for leaving tracks.
+            hx, hy = (bw - 1.0) / 2.0, (bh - 1.0) / 2.0
+            sx, sy = px - bx, py - by
+            if not (
+                sx + max(bx - hx, 0.0) >= -1.0
+                and sy + max(by - hy, 0.0) >= -1.0
+                and sx + min(bx + hx, width) <= width + 0.5
+                and sy + min(by + hy, height) <= height + 0.5
+            ):
+                continue
             t = self._current(int(pos[j]))
             if t is None:
                 continue
             ph, pw = t.patch.shape
             ox, oy = t.offset
-            px, py = p_list[j]
             # top-left of the template when its box centre sits on the prediction
             tx, ty = round(px - ox), round(py - oy)
             if tx < 0 or ty < 0 or tx + pw > width or ty + ph > height:
@@ -555,11 +571,10 @@ class TemplateBank:
             if c < 0 or best < -1.0:  # nothing inside the gate, or only flat placements
                 continue
             score[j] = best
-            out[j] = (x0 + c + ox, y0 + i + oy)
-            found[j] = best >= self.min_score
-            if found[j]:
+            if best >= self.min_score:
+                found[j] = True
+                out[j] = (x0 + c + ox, y0 + i + oy)
                 self._f[pos[j], self._LAST] = out[j]  # held: the match is its last place
-        out[~found] = np.nan
         return found, out, score
 
     def bind(self, frame: Image, gate_radius: float | None = None) -> RescueFn:
