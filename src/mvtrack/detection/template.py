@@ -62,7 +62,7 @@ class _Template:
     """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
     the observation tick; for a masked template also the terms of :func:`masked_ncc`."""
 
-    __slots__ = ("mask", "mf", "n", "offset", "patch", "tick", "tz", "var_t")
+    __slots__ = ("gate", "mask", "mf", "n", "offset", "patch", "tick", "tz", "var_t")
 
     def __init__(
         self,
@@ -76,6 +76,10 @@ class _Template:
         self.mask = mask
         self.offset = offset
         self.tick = tick
+        # the gate mask of the last search and its key (placements' shape, offset of the
+        # first placement's centre from the search centre): a stopped vehicle is searched
+        # around the same place frame after frame, so the mask is usually reused
+        self.gate: tuple[tuple[int, int, float, float, float], Image] | None = None
         if mask is not None:
             self.mf = (mask > 0).astype(np.float32)
             self.n = float(cv2.countNonZero(mask))
@@ -564,9 +568,14 @@ class TemplateBank:
                 ncc = masked_ncc(window, t.tz, t.mf, t.var_t, t.n)
             cv2.patchNaNs(ncc, -2.0)  # flat placements: no correlation
             # centre of placement (row i, col c) is (x0 + c + ox, y0 + i + oy); circular gate
-            cx = np.arange(ncc.shape[1]) + (x0 + ox - px)
-            cy = np.arange(ncc.shape[0]) + (y0 + oy - py)
-            inside = cv2.compare(np.add.outer(cy * cy, cx * cx), r2, cv2.CMP_LE)
+            key = (*ncc.shape, x0 + ox - px, y0 + oy - py, r2)
+            if t.gate is not None and t.gate[0] == key:
+                inside = t.gate[1]
+            else:
+                cx = np.arange(ncc.shape[1]) + key[2]
+                cy = np.arange(ncc.shape[0]) + key[3]
+                inside = cv2.compare(np.add.outer(cy * cy, cx * cx), r2, cv2.CMP_LE)
+                t.gate = (key, inside)
             _, best, _, (c, i) = cv2.minMaxLoc(ncc, inside)
             if c < 0 or best < -1.0:  # nothing inside the gate, or only flat placements
                 continue
