@@ -396,3 +396,29 @@ def test_dense_stages_with_a_size_gate_equal_sparse_gating(stretch: bool) -> Non
         assert set(zip(mt.tolist(), md.tolist(), strict=True)) == want
         ratio = np.maximum(dwh[md] / twh[mt], twh[mt] / dwh[md]).max(axis=1)
         assert (ratio <= 1.8).all()
+
+
+@pytest.mark.parametrize("gate, gate2", [(25.0, 144.0), (144.0, 25.0)])
+def test_dense_two_stage_without_second_stage_pairs_equals_two_sparse_stages(
+    gate: float, gate2: float
+) -> None:
+    # sparse scenes: most have no pair within gate2 besides the first stage's matches, which
+    # dense_two_stage returns without building the second stage's matrix
+    rng = np.random.default_rng(9)
+    kinds = set()
+    for _ in range(200):
+        n = int(rng.integers(1, 12))
+        txy, dxy = _scene(rng, n, n + int(rng.integers(0, n + 1)), 150.0)
+        m = dxy.shape[0]
+        mt, md, ud = fa.dense_two_stage(txy, dxy, None, gate, gate2)
+        t1, d1 = fa.optimal(*fa.gate_pairs(txy, dxy, None, gate), n, m, gate)
+        lt, ld = np.setdiff1d(np.arange(n), t1), np.setdiff1d(np.arange(m), d1)
+        t2, d2 = fa.optimal(*fa.gate_pairs(txy[lt], dxy[ld], None, gate2), lt.size, ld.size,
+                            gate2)
+        kinds.add(t2.size > 0)
+        want = set(zip(t1.tolist(), d1.tolist(), strict=True)) | set(
+            zip(lt[t2].tolist(), ld[d2].tolist(), strict=True)
+        )
+        assert set(zip(mt.tolist(), md.tolist(), strict=True)) == want
+        np.testing.assert_array_equal(ud, np.setdiff1d(np.arange(m), md))
+    assert kinds == ({True, False} if gate < gate2 else {False})

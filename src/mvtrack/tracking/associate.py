@@ -317,6 +317,9 @@ def dense_two_stage(
     free_d[cols] = False
     if rows.size == n or rows.size == m:
         return rows, cols, free_d.nonzero()[0]
+    if d2 is not None and gate <= gate2 and np.count_nonzero(d2 <= gate2) == rows.size:
+        # the pairs within gate2 are the matched ones (each within gate): no second stage
+        return rows, cols, free_d.nonzero()[0]
     free_t = np.empty(n, dtype=bool)
     free_t.fill(True)
     free_t[rows] = False
