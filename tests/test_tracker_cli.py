@@ -33,14 +33,34 @@ def test_track_detections_writes_results_and_prints_a_summary(tmp_path, capsys) 
     assert line.count("\n") == 0 and "30 frames, 59 detections -> 2 tracks" in line
     table = read_tracks(out / "seq.txt")
     assert sorted(set(table.id.tolist())) == [1, 2]
-    # confirmed on the 2nd frame; the missed frame is bridged by a coasting row
-    assert table.frame.min() == 1 and len(table) == 2 * 29
+    # confirmed on the 2nd frame and written from the 1st (backfill, the default); the
+    # missed frame is bridged by a coasting row
+    assert table.frame.min() == 0 and len(table) == 2 * 30
     id_a = table.id[(table.frame == 5) & (np.abs(table.tlwh[:, 2] - 40.0) < 5)]
     rows_a = table.take(np.flatnonzero(table.id == id_a[0]))
     centre = rows_a.tlwh[:, :2] + rows_a.tlwh[:, 2:] / 2
     np.testing.assert_allclose(centre, a[rows_a.frame], atol=1.5)
     assert main(["track-detections", str(det), "--out", str(out), "--no-coasting"]) == 0
-    assert len(read_tracks(out / "seq.txt")) == 2 * 29 - 1
+    assert len(read_tracks(out / "seq.txt")) == 2 * 30 - 1
+    assert main(["track-detections", str(det), "--out", str(out), "--no-backfill"]) == 0
+    online = read_tracks(out / "seq.txt")
+    assert online.frame.min() == 1 and len(online) == 2 * 29
+
+
+def test_cli_results_equal_the_library_run(tmp_path) -> None:
+    from mvtrack.io.mot import read_detections
+    from mvtrack.tracking import preset, track_detections
+
+    det = tmp_path / "d.txt"
+    _det_file(det)
+    for flag, config in (([], preset("default", fps=30.0)),
+                         (["--no-backfill"], preset("default", fps=30.0, backfill=False))):
+        assert main(["track-detections", str(det), "--out", str(tmp_path / "o"), *flag]) == 0
+        got = read_tracks(tmp_path / "o" / "d.txt")
+        want = np.asarray(track_detections(read_detections(det), config).to_mot())
+        np.testing.assert_array_equal(got.frame, want[:, 0].astype(int) - 1)
+        np.testing.assert_array_equal(got.id, want[:, 1].astype(int))
+        np.testing.assert_allclose(got.tlwh, want[:, 2:6], atol=1e-3)
 
 
 @pytest.mark.parametrize(

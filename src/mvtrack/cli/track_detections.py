@@ -43,6 +43,15 @@ def register(app: typer.Typer) -> None:
         coasting: Annotated[
             bool, typer.Option(help="Also write the rows of coasting (missed) tracks.")
         ] = True,
+        backfill: Annotated[
+            bool | None,
+            typer.Option(
+                "--backfill/--no-backfill",
+                help="Write a confirmed track's rows from its first detection "
+                "(default: the preset's setting).",
+                show_default=False,
+            ),
+        ] = None,
     ) -> None:
         """Track the detections of DETFILE and write MOTChallenge results into --out."""
         from tqdm import tqdm
@@ -50,8 +59,8 @@ def register(app: typer.Typer) -> None:
         from mvtrack.association import ASSIGN_RULES, DISTANCES
         from mvtrack.filters.predictors import PREDICTORS
         from mvtrack.io.mot import read_detections
-        from mvtrack.tracking import Tracker, TrackLog
         from mvtrack.tracking import preset as make_preset
+        from mvtrack.tracking import track_detections
 
         _check_choice("--predictor", predictor, [*PREDICTORS, "structured"])
         _check_choice("--distance", distance, DISTANCES)
@@ -65,14 +74,13 @@ def register(app: typer.Typer) -> None:
             changes["gate"] = parse_gate(gate)
         elif distance is not None:
             changes["gate"] = None  # the chosen distance's default, not the preset's
+        if backfill is not None:
+            changes["backfill"] = backfill
         config = make_preset(preset, fps=fps, **changes)
-        tracker = Tracker(config)
         frames = read_detections(detfile)
-        log = TrackLog()
         t0 = time.perf_counter()
         bar = tqdm(frames, desc="tracking", unit="frame", disable=not sys.stderr.isatty())
-        for dets in bar:
-            log.append(tracker.step(dets))
+        log = track_detections(bar, config)
         seconds = time.perf_counter() - t0
         dest = out / results_name(detfile)
         log.write_mot(dest, include_coasting=coasting)
