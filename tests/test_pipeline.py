@@ -274,7 +274,7 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
     base = TrackerConfig()
     small = resolve_settings(RunSettings(), (320, 240))
     assert small.detector_params == {"min_area": 40.0, "close_size": 7}
-    assert small.tracker == {"measurement_std": 2.0}
+    assert small.tracker == {"measurement_std": 2.0, "size_gate": None}  # blobs: no size gate
     big = resolve_settings(RunSettings(), (640, 480))  # s² = 4
     assert big.detector_params["min_area"] == 160.0 and big.detector_params["close_size"] == 7
     assert big.tracker["measurement_std"] == 4.0
@@ -288,7 +288,8 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
     assert mine.tracker["gate"] == 50.0 and mine.tracker["measurement_std"] == 1.0
     assert mine.detector_params["min_area"] == 5.0
     tiny = resolve_settings(RunSettings(), (96, 64))
-    assert tiny.tracker == {"measurement_std": 2.0} and tiny.detector_params["min_area"] == 3.0
+    assert tiny.tracker == {"measurement_std": 2.0, "size_gate": None}
+    assert tiny.detector_params["min_area"] == 3.0
     paper = resolve_settings(RunSettings(tracker={"preset": "paper1"}), (640, 480))
     assert paper.tracker == {"preset": "paper1"}
 

@@ -352,7 +352,7 @@ def test_track_detections_fills_skipped_frames_and_rejects_disorder() -> None:
 def test_coasting_rows_are_output_only_for_coast_output_but_the_track_lives_on() -> None:
     a = _line([100.0, 100.0], [2.0, 0.0], 20)
     a[8:14] = np.nan  # a 6-frame gap, shorter than max_coast = 0.3 s = 9 frames at 30 fps
-    config = TrackerConfig(fps=30.0, max_coast=0.3, coast_output=2 / 30)
+    config = TrackerConfig(fps=30.0, max_coast=0.3, coast_output=2 / 30, interpolate=False)
     log = track_detections(_frames({0: a}, 20), config)
     ids = [tf.track_id.tolist() for tf in log]
     states = [tf.state.tolist() for tf in log]
@@ -361,6 +361,29 @@ def test_coasting_rows_are_output_only_for_coast_output_but_the_track_lives_on()
     assert ids[14:] == [[1]] * 6 and states[14] == [TrackState.CONFIRMED]  # same ID after
     every = track_detections(_frames({0: a}, 20), config.replace(coast_output=None))
     assert [tf.track_id.tolist() for tf in every][8:14] == [[1]] * 6
+
+
+def test_interpolation_writes_a_bridged_gap_on_the_line_and_cuts_the_tail() -> None:
+    a = _line([100.0, 100.0], [2.0, 1.0], 30)
+    a[8:14] = np.nan  # bridged: the track is associated again at frame 14
+    a[22:] = np.nan  # the target leaves: the track coasts 9 frames and is deleted
+    config = TrackerConfig(fps=30.0, max_coast=0.3, coast_output=2 / 30)
+    log = track_detections(_frames({0: a}, 30), config)
+    plain = track_detections(_frames({0: a}, 30), config.replace(interpolate=False))
+    # every row of the gap is written, on the straight line between the filtered positions
+    # of frames 7 and 14; the rows with a measurement are those of the run without it
+    assert [tf.track_id.tolist() for tf in log][8:14] == [[1]] * 6
+    assert all(int(log[k].state[0]) == TrackState.COASTING for k in range(8, 14))
+    x7, x14 = log[7].filtered_xy[0], log[14].filtered_xy[0]
+    for k in range(8, 14):
+        t = (k - 7) / 7
+        np.testing.assert_allclose(log[k].filtered_xy[0], (1 - t) * x7 + t * x14)
+        np.testing.assert_allclose(log[k].velocity[0], (x14 - x7) / 7)
+    for k in [*range(8), *range(14, 22)]:
+        np.testing.assert_array_equal(log[k].filtered_xy, plain[k].filtered_xy)
+    # after the last detection only coast_output (2 frames) is written, as without it
+    assert [len(tf) for tf in log][22:] == [1, 1] + [0] * 6
+    assert [len(tf) for tf in plain][22:] == [1, 1] + [0] * 6
 
 
 def _jump_frames(wh: np.ndarray, jump: np.ndarray) -> list[Detections]:
@@ -410,7 +433,9 @@ def test_size_term_gives_the_small_box_to_the_small_track(weight, small_takes) -
         for k in range(5)
     ]
     last = Detections(5, [[104.0, 100.0], [104.5, 100.0]], [[44.0, 44.0], [20.0, 20.0]])
-    config = TrackerConfig(size_weight=weight, second_gate=None, recover_speed=None)
+    config = TrackerConfig(
+        size_weight=weight, second_gate=None, recover_speed=None, size_gate=None
+    )
     log = track_detections([*still, last], config)
     out = log[5]
     by_id = dict(zip(out.track_id.tolist(), out.det_index.tolist(), strict=True))
@@ -430,8 +455,9 @@ def test_size_gate_keeps_a_box_of_another_size_from_a_track() -> None:
         p = xy[k] + (3.0 if small else 0.0, 0.0)
         wh = [[40.0, 90.0]] if small else [[100.0, 200.0]]
         frames.append(Detections(k, p[None], np.array(wh)))
-    config = TrackerConfig(fps=25.0)
+    config = TrackerConfig(fps=25.0, size_gate=None)
     assert track_detections(frames, config).track_ids.tolist() == [1]
+    assert TrackerConfig().size_gate == 2.0  # on by default
     gated = track_detections(frames, config.replace(size_gate=2.0))
     assert gated.track_ids.tolist() == [1, 2]
     assert gated[n - 1].track_id.tolist() == [2]
@@ -445,4 +471,4 @@ def test_size_gate_keeps_a_box_of_another_size_from_a_track() -> None:
 def test_size_gate_must_be_a_ratio_above_one() -> None:
     with pytest.raises(ValueError, match="size_gate"):
         TrackerConfig(size_gate=1.0)
-    assert TrackerConfig().size_gate is None
+    assert TrackerConfig(size_gate=None).size_gate is None

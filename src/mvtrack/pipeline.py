@@ -230,6 +230,9 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
       stays: scaled, it let tracks hop 70 px per frame on 768×576 video at 10 fps. Its
       ``size_ref`` is scaled by ``s`` too (boxes larger than that stretch the gates).
 
+    - no size gate (``size_gate = None``): blobs merge and split, so the size of a blob's box
+      says little about which object it is.
+
     The tracker values are only scaled up: images smaller than 320×240 keep them.
 
     Values present in ``settings`` are kept; the paper presets are not touched.
@@ -241,6 +244,9 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
     det.setdefault("close_size", 7)
     tracker = dict(settings.tracker)
     if tracker.get("preset", "default") == "default":
+        # blobs merge and split (two vehicles in one blob, a person in two): a blob's box
+        # size is no evidence of identity, unlike a detector's box
+        tracker.setdefault("size_gate", None)
         up = max(s2, 1.0)  # smaller images keep the 320×240 values
         if not {"predictor_params", "measurement_std"} & set(tracker):
             tracker["measurement_std"] = round(2.0 * up**0.5, 3)  # r = 4 s² px²

@@ -151,6 +151,9 @@ class TrackerConfig:
         track the smoothed one) are never paired, however close: a box twice or half the
         size is another object (a person nearer or farther away, or a different one), the
         consistency that the overlap enforces in IoU association. ``None`` disables it.
+        Default 2, for a detector's boxes; the video pipeline turns it off for the
+        disturbance map's blobs, which merge and split
+        (:func:`mvtrack.pipeline.resolve_settings`).
     backfill : bool
         Offline runs only (:func:`~mvtrack.tracking.track_detections`): once a track is
         confirmed, the rows of its tentative frames — from its first detection on — are
@@ -185,8 +188,9 @@ class TrackerConfig:
     size_ref: float | None = 50.0
     coast_output: float | None = 0.08
     size_weight: float = 0.5
-    size_gate: float | None = None
+    size_gate: float | None = 2.0
     backfill: bool = True
+    interpolate: bool = True
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -218,8 +222,9 @@ class TrackerConfig:
             isinstance(g, (int, float)) and math.isfinite(g) and g > 1.0
         ):
             raise bad("size_gate", "must be a finite ratio > 1 or None")
-        if not isinstance(self.backfill, bool):
-            raise bad("backfill", "must be True or False")
+        for name in ("backfill", "interpolate"):
+            if not isinstance(getattr(self, name), bool):
+                raise bad(name, "must be True or False")
         w = self.size_weight
         if not isinstance(w, (int, float)) or not (0.0 <= w < 1.0):
             raise bad("size_weight", "must be a number in [0, 1)")
@@ -289,8 +294,8 @@ def _round(x: float) -> int:
 
 
 #: what both paper presets share: R = 4 px² (SPEC §2.1 [R]), the predictors' own priors, no
-#: recovery stage, no scaling with the box size, paper 1's warm-up gate centre until 2M = 6
-#: associations
+#: recovery stage, no scaling with the box size or size gate, paper 1's warm-up gate centre
+#: until 2M = 6 associations
 _PAPER_COMMON: dict[str, Any] = {
     "size_ref": None,
     "coast_output": None,
@@ -300,6 +305,7 @@ _PAPER_COMMON: dict[str, Any] = {
     "accel_std": None,
     "recover_speed": None,
     "second_gate": None,
+    "size_gate": None,
     "warmup": True,
     "warmup_hits": 6,
 }
@@ -360,9 +366,12 @@ def default(fps: float = 30.0) -> TrackerConfig:
     from the last measurement) for established targets that turned or bounced. σ_z, the
     gates and the recovery margin hold for boxes up to 50 px and stretch per axis with larger
     boxes (``size_ref``). Confirmation on 2 consecutive hits; a track coasts up to 0.3 s but
-    its coasting rows are output only for the first 0.08 s (``coast_output``). Offline runs
+    its coasting rows are output only for the first 0.08 s (``coast_output``). A track and a
+    detection whose box widths or heights differ by more than a factor 2 are never paired
+    (``size_gate``; off in the video pipeline). Offline runs
     (:func:`~mvtrack.tracking.track_detections`) write a confirmed track from its first
-    detection on (``backfill``)."""
+    detection on (``backfill``) and the gaps it bridged in full, interpolated
+    (``interpolate``)."""
     return TrackerConfig(fps=fps)
 
 

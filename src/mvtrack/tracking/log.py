@@ -137,3 +137,89 @@ def backfill(frames: list[TrackFrame], uids: list[NDArray[np.int64]]) -> list[Tr
             f.filtered_xy[keep], f.predicted_xy[keep], f.wh[keep], f.velocity[keep],
         ))
     return out
+
+
+def interpolate_gaps(frames: list[TrackFrame], tail: int | None = None) -> list[TrackFrame]:
+    """Fill the gaps of every track by linear interpolation between its measured rows.
+
+    Offline post-processing (the linear interpolation of ByteTrack's and other offline
+    MOTChallenge trackers). A row is *anchored* when it carries a measurement (a detection,
+    or a template match in the ``STOPPED`` state). A run of unanchored (coasting) rows
+    between two anchored rows ``a`` and ``b`` of the same track is re-estimated from them:
+    for a row at frame ``k``, with ``t = (k - k_a) / (k_b - k_a)``,
+
+    ``x_k = (1 - t) x_a + t x_b``,  ``wh_k = (1 - t) wh_a + t wh_b``,
+    ``v_k = (x_b - x_a) / (k_b - k_a)``
+
+    (``x`` the filtered position); the rows keep their ``COASTING`` state. A run after a
+    track's last anchored row (the track was deleted, or the sequence ended) is not bridged;
+    only its first ``tail`` rows are kept (all with ``tail=None``), as the online tracker's
+    ``coast_output`` does.
+
+    Parameters
+    ----------
+    frames : list of TrackFrame
+        A run's output, every coasting row included.
+    tail : int or None
+        Coasting rows kept after a track's last anchored row.
+
+    Returns
+    -------
+    list of TrackFrame
+        One frame per input frame, same order, with the rows of each frame in their input
+        order (rows dropped from tails left out).
+    """
+    if not frames:
+        return []
+    sizes = np.array([len(f) for f in frames])
+    frame_of = np.repeat(np.array([f.frame for f in frames], dtype=np.int64), sizes)
+    n = int(sizes.sum())
+    if n == 0:
+        return list(frames)
+
+    def cat(name: str) -> NDArray:
+        return np.concatenate([getattr(f, name) for f in frames])
+
+    tid, state, det = cat("track_id"), cat("state"), cat("det_index")
+    filtered, wh, velocity = cat("filtered_xy"), cat("wh"), cat("velocity")
+    # rows without a public ID (tentative tracks, output_tentative) are left as they are
+    anchored = (det >= 0) | (state == int(TrackState.STOPPED)) | (tid <= 0)
+    if anchored.all():
+        return list(frames)
+    order = np.lexsort((frame_of, tid))  # by track, then frame
+    s_tid, s_frame, s_anchor = tid[order], frame_of[order], anchored[order]
+    pos = np.arange(n)
+    prev = np.maximum.accumulate(np.where(s_anchor, pos, -1))
+    nxt = np.minimum.accumulate(np.where(s_anchor, pos, n)[::-1])[::-1]
+    has_prev = (prev >= 0) & (s_tid[np.maximum(prev, 0)] == s_tid)
+    has_next = (nxt < n) & (s_tid[np.minimum(nxt, n - 1)] == s_tid)
+    inner = ~s_anchor & has_prev & has_next
+    keep_sorted = np.ones(n, dtype=bool)
+    if tail is not None:
+        after = ~s_anchor & has_prev & ~has_next
+        keep_sorted[after] = (s_frame - s_frame[np.maximum(prev, 0)])[after] <= tail
+
+    rows = order[inner]  # positions in the concatenated arrays
+    a, b = order[prev[inner]], order[nxt[inner]]
+    span = (frame_of[b] - frame_of[a]).astype(np.float64)
+    t = ((frame_of[rows] - frame_of[a]) / span)[:, None]
+    filtered = filtered.copy()
+    wh = wh.copy()
+    velocity = velocity.copy()
+    filtered[rows] = (1.0 - t) * filtered[a] + t * filtered[b]
+    wh[rows] = (1.0 - t) * wh[a] + t * wh[b]
+    velocity[rows] = (filtered[b] - filtered[a]) / span[:, None]
+
+    keep = np.empty(n, dtype=bool)
+    keep[order] = keep_sorted
+    measured, predicted = cat("measured_xy"), cat("predicted_xy")
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    out = []
+    for i, f in enumerate(frames):
+        lo, hi = bounds[i], bounds[i + 1]
+        k = lo + np.flatnonzero(keep[lo:hi])
+        out.append(TrackFrame(
+            f.frame, tid[k], state[k], det[k], measured[k], filtered[k], predicted[k], wh[k],
+            velocity[k],
+        ))
+    return out

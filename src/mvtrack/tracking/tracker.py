@@ -56,7 +56,7 @@ from mvtrack.tracking.lifecycle import (
     hand_out_ids,
     next_state,
 )
-from mvtrack.tracking.log import TrackLog, backfill
+from mvtrack.tracking.log import TrackLog, backfill, interpolate_gaps
 from mvtrack.types import Detections, TrackFrame
 
 FloatArray = NDArray[np.float64]
@@ -712,11 +712,17 @@ def track_detections(
     Frames must come in increasing order; a frame index that skips ahead is filled with empty
     frames so that the predictors advance one step per frame. With ``config.backfill`` (and
     without ``output_tentative``) a confirmed track's rows start at its first detection
-    (:func:`mvtrack.tracking.log.backfill`).
+    (:func:`mvtrack.tracking.log.backfill`); with ``config.interpolate`` the gaps a track
+    bridged are written in full, interpolated (:func:`mvtrack.tracking.log.interpolate_gaps`).
     """
     config = TrackerConfig() if config is None else config
-    late = isinstance(config, TrackerConfig) and config.backfill and not config.output_tentative
-    tracker = Tracker(config.replace(output_tentative=True) if late else config)
+    own = isinstance(config, TrackerConfig)
+    late = own and config.backfill and not config.output_tentative
+    fill = own and config.interpolate
+    inner = config.replace(output_tentative=True) if late else config
+    if fill:  # every coasting row, to be interpolated or cut to coast_output afterwards
+        inner = inner.replace(coast_output=None)
+    tracker = Tracker(inner)
     out: list[TrackFrame] = []
     uids: list[IntArray] = []
     last = None
@@ -732,7 +738,11 @@ def track_detections(
         out.append(tracker.step(dets, rescue))
         uids.append(tracker.row_uids)
         last = dets.frame
+    if late:
+        out = backfill(out, uids)
+    if fill:
+        out = interpolate_gaps(out, config.frames().coast_output)
     log = TrackLog()
-    for tf in backfill(out, uids) if late else out:
+    for tf in out:
         log.append(tf)
     return log
