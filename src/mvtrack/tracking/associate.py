@@ -31,6 +31,8 @@ that cost more than they gain are refused. It is solved in tiers:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
@@ -101,9 +103,12 @@ def _size_apart(
     without a size gate."""
     if size is None or len(size) < 4:
         return None
-    rho = size[3]
-    big = np.maximum(twh, dwh)
-    return (big > rho * np.minimum(twh, dwh)).any(axis=-1)
+    # max(a, b) > ρ min(a, b)  ⟺  |ln a − ln b| > ln ρ: logs of the (N, 2) and (M, 2) sizes,
+    # then three (N, M) operations per axis instead of five on (N, M, 2)
+    lt, ld = np.log(twh), np.log(dwh)
+    dw = np.abs(ld[..., 0] - lt[..., 0])
+    dh = np.abs(ld[..., 1] - lt[..., 1])
+    return np.maximum(dw, dh, out=dw) > math.log(size[3])
 
 
 def _add_size(cost: FloatArray, s: FloatArray, weight: float, cap: float) -> FloatArray:
