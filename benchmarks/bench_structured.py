@@ -161,7 +161,7 @@ def main() -> None:
             f"| **total** | {n} | **{total:.2f}** | {total / n:.3f} | {total_wall:.2f} |",
             "",
             f"Frame rate for {n} people on one core (CPU time): **{1e3 / total:.0f} fps** "
-            "(target ≥ 30 fps); on the loaded shared machine (wall time) "
+            "(target ≥ 30 fps); on the shared machine (wall time) "
             f"{1e3 / total_wall:.0f} fps. The SKF step is vectorised over people and parts, so "
             "its cost grows slowly with the number of people; segmentation is per person (one "
             "crop each) and dominates. Not included: the moving-region / background step of "
