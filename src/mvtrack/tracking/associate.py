@@ -111,6 +111,15 @@ def _size_apart(
     return np.maximum(dw, dh, out=dw) > math.log(size[3])
 
 
+def _mask_apart(cost: FloatArray, size: SizeTerm | None) -> NDArray[np.bool_] | None:
+    """Set the costs of the track × detection pairs that the size gate refuses to ``inf``
+    (in place, ``cost`` (N, M)); returns those pairs, or ``None`` without a size gate."""
+    apart = None if size is None else _size_apart(size, size[0][:, None], size[1][None])
+    if apart is not None:
+        cost[apart] = np.inf
+    return apart
+
+
 def _add_size(cost: FloatArray, s: FloatArray, weight: float, cap: float) -> FloatArray:
     """``cost + weight · min(s, cap)``: with ``weight < 1`` and ``cap`` the gate, a gated pair
     still costs less than ``2 gate`` (leaving its track and detection unmatched)."""
@@ -138,9 +147,7 @@ def gate_pairs(
         return _EMPTY, _EMPTY, np.zeros(0)
     if n * m <= DENSE_GATE:
         cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
-        apart = _size_apart(size, size[0][:, None], size[1][None]) if size else None
-        if apart is not None:
-            cost[apart] = np.inf
+        _mask_apart(cost, size)
         ti, dj = np.nonzero(cost <= gate)
         return ti, dj, _pair_size(ti, dj, cost[ti, dj], scale, gate, size)
     if scale is None:
@@ -261,9 +268,7 @@ def dense_optimal(
     constant). ``size`` as in :func:`gate_pairs`. Returns matched (track, detection) rows.
     """
     cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
-    apart = _size_apart(size, size[0][:, None], size[1][None]) if size else None
-    if apart is not None:
-        cost[apart] = np.inf
+    _mask_apart(cost, size)
     ok = cost <= gate  # NaN never passes
     pairs = _isolated(ok)
     if pairs is not None:
@@ -295,9 +300,7 @@ def dense_two_stage(
     dx = dxy[:, 0] - txy[:, 0, None]
     dy = dxy[:, 1] - txy[:, 1, None]
     cost = _cost(dx, dy, scale)  # eq. (8) of paper 2, squared (over S)
-    apart = _size_apart(size, size[0][:, None], size[1][None]) if size else None
-    if apart is not None:  # both stages (d2 below is cost, or masked again)
-        cost[apart] = np.inf
+    apart = _mask_apart(cost, size)  # both stages (d2 below is cost, or masked again)
     plain = scale is None and scale2 is None
     d2 = cost if plain else None  # the second stage's costs (copied before cost changes)
     ok = cost <= gate  # NaN never passes

@@ -13,6 +13,39 @@ from mvtrack.types import TrackFrame, TrackState
 #: MOTChallenge ``conf`` column per state: rows with a measurement 1, coasting rows 0.5.
 _CONF = np.array([1.0, 1.0, 0.5, 1.0, 0.0])
 
+#: the array fields of :class:`~mvtrack.types.TrackFrame`, in its order
+_FIELDS = (
+    "track_id", "state", "det_index", "measured_xy", "filtered_xy", "predicted_xy", "wh",
+    "velocity",
+)
+
+
+def _columns(frames: list[TrackFrame]) -> dict[str, NDArray]:
+    """The rows of ``frames`` concatenated: ``frame`` (K,) and one array per field (new
+    arrays, never views of the frames')."""
+    frames = frames or [TrackFrame.empty(0)]
+    cols = {
+        "frame": np.repeat(
+            np.array([f.frame for f in frames], dtype=np.int64), [len(f) for f in frames]
+        )
+    }
+    for name in _FIELDS:
+        cols[name] = np.concatenate([getattr(f, name) for f in frames])
+    return cols
+
+
+def _split(
+    frames: list[TrackFrame], cols: dict[str, NDArray], keep: NDArray[np.bool_]
+) -> list[TrackFrame]:
+    """One :class:`TrackFrame` per frame of ``frames`` holding the rows of ``cols`` (aligned
+    with the concatenated rows of ``frames``) that ``keep`` selects."""
+    bounds = np.concatenate([[0], np.cumsum([len(f) for f in frames])])
+    out = []
+    for i, f in enumerate(frames):
+        k = bounds[i] + np.flatnonzero(keep[bounds[i] : bounds[i + 1]])
+        out.append(TrackFrame(f.frame, *(cols[name][k] for name in _FIELDS)))
+    return out
+
 
 class TrackLog:
     """All :class:`~mvtrack.types.TrackFrame` s of a run, kept as arrays.
@@ -49,19 +82,7 @@ class TrackLog:
     def columns(self) -> dict[str, NDArray]:
         """All rows as arrays: ``frame`` (K,) plus every array field of ``TrackFrame``."""
         if self._cache is None:
-            frames = self._frames or [TrackFrame.empty(0)]
-            cols: dict[str, NDArray] = {
-                "frame": np.repeat(
-                    np.array([f.frame for f in frames], dtype=np.int64),
-                    [len(f) for f in frames],
-                )
-            }
-            for name in (
-                "track_id", "state", "det_index", "measured_xy", "filtered_xy",
-                "predicted_xy", "wh", "velocity",
-            ):
-                cols[name] = np.concatenate([getattr(f, name) for f in frames])
-            self._cache = cols
+            self._cache = _columns(self._frames)
         return self._cache
 
     @property
@@ -132,10 +153,7 @@ def backfill(frames: list[TrackFrame], uids: list[NDArray[np.int64]]) -> list[Tr
             continue
         tid = tid_of[u]
         keep = (tid > 0).nonzero()[0]
-        out.append(TrackFrame(
-            f.frame, tid[keep], f.state[keep], f.det_index[keep], f.measured_xy[keep],
-            f.filtered_xy[keep], f.predicted_xy[keep], f.wh[keep], f.velocity[keep],
-        ))
+        out.append(TrackFrame(f.frame, tid[keep], *(getattr(f, n)[keep] for n in _FIELDS[1:])))
     return out
 
 
@@ -171,19 +189,11 @@ def interpolate_gaps(frames: list[TrackFrame], tail: int | None = None) -> list[
     """
     if not frames:
         return []
-    sizes = np.array([len(f) for f in frames])
-    frame_of = np.repeat(np.array([f.frame for f in frames], dtype=np.int64), sizes)
-    n = int(sizes.sum())
-    if n == 0:
-        return list(frames)
-
-    def cat(name: str) -> NDArray:
-        return np.concatenate([getattr(f, name) for f in frames])
-
-    tid, state, det = cat("track_id"), cat("state"), cat("det_index")
-    filtered, wh, velocity = cat("filtered_xy"), cat("wh"), cat("velocity")
+    c = _columns(frames)
+    n = c["frame"].size
+    tid, frame_of = c["track_id"], c["frame"]
     # rows without a public ID (tentative tracks, output_tentative) are left as they are
-    anchored = (det >= 0) | (state == int(TrackState.STOPPED)) | (tid <= 0)
+    anchored = (c["det_index"] >= 0) | (c["state"] == int(TrackState.STOPPED)) | (tid <= 0)
     if anchored.all():
         return list(frames)
     order = np.lexsort((frame_of, tid))  # by track, then frame
@@ -203,23 +213,10 @@ def interpolate_gaps(frames: list[TrackFrame], tail: int | None = None) -> list[
     a, b = order[prev[inner]], order[nxt[inner]]
     span = (frame_of[b] - frame_of[a]).astype(np.float64)
     t = ((frame_of[rows] - frame_of[a]) / span)[:, None]
-    filtered = filtered.copy()
-    wh = wh.copy()
-    velocity = velocity.copy()
-    filtered[rows] = (1.0 - t) * filtered[a] + t * filtered[b]
+    xy, wh = c["filtered_xy"], c["wh"]  # new arrays (_columns): changed in place
+    xy[rows] = (1.0 - t) * xy[a] + t * xy[b]
     wh[rows] = (1.0 - t) * wh[a] + t * wh[b]
-    velocity[rows] = (filtered[b] - filtered[a]) / span[:, None]
-
+    c["velocity"][rows] = (xy[b] - xy[a]) / span[:, None]
     keep = np.empty(n, dtype=bool)
     keep[order] = keep_sorted
-    measured, predicted = cat("measured_xy"), cat("predicted_xy")
-    bounds = np.concatenate([[0], np.cumsum(sizes)])
-    out = []
-    for i, f in enumerate(frames):
-        lo, hi = bounds[i], bounds[i + 1]
-        k = lo + np.flatnonzero(keep[lo:hi])
-        out.append(TrackFrame(
-            f.frame, tid[k], state[k], det[k], measured[k], filtered[k], predicted[k], wh[k],
-            velocity[k],
-        ))
-    return out
+    return _split(frames, c, keep)
