@@ -48,11 +48,16 @@ class GroundCalibration:
         behind the camera (above the horizon) and get NaN.
     residual_m : float
         RMS distance between the mapped image points and their ground points (0 for a scale).
+    region : (V, 2) float64 or None
+        The calibrated part of the image: the convex hull of the image points (None for a
+        scale: everywhere). A homography fitted to four points is only known to hold between
+        them; speeds are measured inside this region only.
     """
 
     H: FloatArray
     sign: float = 1.0
     residual_m: float = 0.0
+    region: FloatArray | None = None
 
     @classmethod
     def from_points(cls, image: ArrayLike, ground: ArrayLike) -> GroundCalibration:
@@ -87,7 +92,8 @@ class GroundCalibration:
         sign = float(np.sign(w[0]))
         out = cls(h, sign)
         res = float(np.sqrt(np.mean(np.sum((out.to_ground(img) - gnd) ** 2, axis=1))))
-        return cls(h, sign, res)
+        hull = cv2.convexHull(img.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+        return cls(h, sign, res, hull)
 
     @classmethod
     def from_scale(cls, metres_per_pixel: float) -> GroundCalibration:
@@ -118,6 +124,15 @@ class GroundCalibration:
                                                                                      None]
         jac[~(w * self.sign > 0)] = np.nan
         return jac
+
+    def calibrated(self, xy: ArrayLike) -> NDArray[np.bool_]:
+        """(K,) which image points lie in the calibrated region (all, for a scale)."""
+        from mvtrack.analytics.geometry import inside_polygon
+
+        p = np.asarray(xy, np.float64).reshape(-1, 2)
+        if self.region is None:
+            return np.isfinite(p).all(axis=1)
+        return inside_polygon(p, self.region)
 
     def metres_per_pixel(self, xy: ArrayLike) -> FloatArray:
         """(K,) local scale ``sqrt(|det J|)``: metres per pixel at image points."""

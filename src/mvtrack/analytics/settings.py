@@ -21,7 +21,7 @@ from typing import Any
 from mvtrack.analytics.calibration import GroundCalibration
 from mvtrack.analytics.lines import CountLine
 from mvtrack.analytics.movements import MovementSettings
-from mvtrack.analytics.speed import SpeedSettings
+from mvtrack.analytics.speed import VELOCITIES, SpeedSettings
 from mvtrack.analytics.tracks import ANCHORS
 from mvtrack.analytics.zones import Zone
 from mvtrack.errors import InputError
@@ -176,7 +176,8 @@ def settings_from_dict(data: dict[str, Any], path: str | os.PathLike[str] = "<se
                                         "(four or more point pairs)")
 
     if "speed" in data:
-        sp = c.table("speed", data["speed"], ("smooth", "stop_z", "stop_max", "anchor"))
+        sp = c.table("speed", data["speed"], ("smooth", "stop_z", "stop_max", "anchor",
+                                               "velocity"))
         skw: dict[str, Any] = {}
         for key in ("smooth", "stop_z", "stop_max"):
             if key in sp:
@@ -184,6 +185,8 @@ def settings_from_dict(data: dict[str, Any], path: str | os.PathLike[str] = "<se
                                     minimum=0.0)
         if "anchor" in sp:
             skw["anchor"] = c.string("speed.anchor", sp["anchor"], ANCHORS)
+        if "velocity" in sp:
+            skw["velocity"] = c.string("speed.velocity", sp["velocity"], VELOCITIES)
         kw["speed"] = SpeedSettings(**skw)
 
     if "movements" in data:
