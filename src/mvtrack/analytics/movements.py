@@ -2,13 +2,16 @@
 
 Approaches are zones on the arms of an intersection. For each track, the visits to the
 approaches (:func:`~mvtrack.analytics.zones.zone_visits`) give its origin (the first) and its
-destination (the last). An end of the track that touches no approach — the track was born
-or lost mid-intersection, or never left its approach — is *completed from its filtered
-heading*: the track's last (or first) position is carried along its mean velocity over the
-last (first) ``window`` frames, forwards (backwards) for at most ``horizon`` seconds, and the
-first other approach that the ray enters is taken, with the track marked ``completed``.
-A track that cannot be completed (it stands still, or the ray meets no approach) is
-``incomplete`` with the unknown end named :data:`UNKNOWN`; it is reported, never dropped.
+destination (the last). A track lost (or born) mid-intersection, outside every approach, is
+*completed from its filtered heading*: from its last (first) position it is carried on with
+its speed, heading and turn rate (the mean velocity over the last (first) ``window``
+seconds, and the change of its direction over the window before), the turn capped at
+``max_turn``, forwards (backwards) for at most ``horizon`` seconds; the first other approach
+that the path enters is taken, and the track is marked ``completed``. A track that ends in
+an approach it has not left (a queue at the end of the video, a track lost while waiting)
+has not shown where it goes, and one that cannot be completed (it stands still, or the path
+meets no approach) is ``incomplete``, the unknown end named :data:`UNKNOWN`: it is reported,
+never dropped.
 
 With a single visit, whether it is the origin or the destination follows from where the
 track is there: born in it (origin), ended in it (destination), or else from the direction
@@ -50,14 +53,17 @@ class MovementSettings:
         Seconds outside an approach that do not end a visit to it.
     min_speed : float
         Slowest heading, px/frame, that is extrapolated.
+    max_turn : float
+        Largest change of heading along an extrapolated path, degrees.
     centre : (2,) float64 or None
         Intersection centre, px (default: the mean of the approaches' centroids).
     """
 
     horizon: float = 3.0
-    window: float = 0.5
+    window: float = 0.25
     gap: float = 0.5
     min_speed: float = 0.2
+    max_turn: float = 100.0
     centre: tuple[float, float] | None = None
 
 
@@ -122,27 +128,50 @@ def turn_table(approaches: list[Zone], centre: FloatArray | None = None) -> dict
 
 
 def _first_hit(
-    start: FloatArray, vel: FloatArray, approaches: list[Zone], exclude: IntArray,
-    steps: int,
+    start: FloatArray, vel: FloatArray, omega: FloatArray, approaches: list[Zone],
+    exclude: IntArray, steps: int, max_turn: float,
 ) -> IntArray:
-    """For rays ``start + t vel`` (T, 2), t = 1 .. steps (frames), the first approach each
-    enters other than ``exclude`` (-1: none)."""
+    """For the paths of constant speed and turn rate from ``start`` (T, 2) with velocity
+    ``vel`` (T, 2, px/frame) and turn rate ``omega`` (T, rad/frame), sampled over
+    ``t = 1 .. steps`` frames, the first approach each enters other than ``exclude``
+    (-1: none). The heading turns by at most ``max_turn`` rad, then goes straight on.
+    """
     t_n = start.shape[0]
     if t_n == 0 or steps < 1:
         return np.full(t_n, -1, np.int64)
-    ts = np.linspace(1.0, float(steps), min(steps, 60))
-    pts = start[:, None, :] + ts[None, :, None] * vel[:, None, :]  # (T, S, 2)
-    flat = pts.reshape(-1, 2)
-    first = np.full(t_n, ts.size, np.int64)
+    ts = np.linspace(1.0, float(steps), min(steps, 60))[None, :]  # (1, S)
+    speed = np.hypot(vel[:, 0], vel[:, 1])[:, None]
+    th0 = np.arctan2(vel[:, 1], vel[:, 0])[:, None]
+    om = omega[:, None]
+    t_turn = np.where(np.abs(om) > 1e-9, max_turn / np.maximum(np.abs(om), 1e-9), np.inf)
+    tc = np.minimum(ts, t_turn)  # time spent turning
+    with np.errstate(invalid="ignore", divide="ignore"):
+        arc_x = np.where(np.abs(om) > 1e-9, (np.sin(th0 + om * tc) - np.sin(th0)) / om,
+                         np.cos(th0) * tc)
+        arc_y = np.where(np.abs(om) > 1e-9, (np.cos(th0) - np.cos(th0 + om * tc)) / om,
+                         np.sin(th0) * tc)
+    th1 = th0 + om * tc
+    rest = ts - tc
+    px = start[:, :1] + speed * (arc_x + np.cos(th1) * rest)
+    py = start[:, 1:] + speed * (arc_y + np.sin(th1) * rest)
+    flat = np.column_stack([px.ravel(), py.ravel()])
+    n_s = ts.shape[1]
+    first = np.full(t_n, n_s, np.int64)
     hit = np.full(t_n, -1, np.int64)
     for a, zone in enumerate(approaches):  # a handful of approaches
-        inside = zone.contains(flat).reshape(t_n, ts.size) & (exclude != a)[:, None]
-        any_in = inside.any(axis=1)
-        where = np.where(any_in, inside.argmax(axis=1), ts.size)
+        inside = zone.contains(flat).reshape(t_n, n_s) & (exclude != a)[:, None]
+        where = np.where(inside.any(axis=1), inside.argmax(axis=1), n_s)
         better = where < first
         first = np.where(better, where, first)
         hit = np.where(better, a, hit)
     return hit
+
+
+def _turn_rate(v_a: FloatArray, v_b: FloatArray, frames: FloatArray) -> FloatArray:
+    """Mean turn rate (rad/frame) from velocity ``v_a`` to ``v_b`` over ``frames``."""
+    d = np.arctan2(v_a[:, 0] * v_b[:, 1] - v_a[:, 1] * v_b[:, 0],
+                   np.einsum("ti,ti->t", v_a, v_b))
+    return np.where(frames > 0, d / np.maximum(frames, 1), 0.0)
 
 
 def track_movements(
@@ -204,15 +233,34 @@ def track_movements(
     origin_frame = np.where(as_origin, vis[j, 2], origin_frame)
     dest[as_dest] = vis[j[as_dest], 5]
 
+    # complete an end from the heading only where the track was lost (or born) outside
+    # every approach: mid-intersection. A track that ends in an approach has not shown where
+    # it goes (or came from): it stays incomplete.
+    in_any_end = np.zeros(t_n, bool)
+    in_any_start = np.zeros(t_n, bool)
+    for zone in approaches:
+        in_any_end |= zone.contains(p[end_row])
+        in_any_start |= zone.contains(p[start_row])
     steps = int(round(st.horizon * fps))
+    max_turn = np.radians(st.max_turn)
+    # heading and turn rate at each end, from the smoothed velocity one window apart
+    inner_end = np.maximum(end_row - half, start_row)
+    inner_start = np.minimum(start_row + half, end_row)
+    v_in_e = np.nan_to_num(vmean[inner_end])
+    v_in_s = np.nan_to_num(vmean[inner_start])
+    span_e = (tracks.frame[end_row] - tracks.frame[inner_end]).astype(np.float64)
+    span_s = (tracks.frame[inner_start] - tracks.frame[start_row]).astype(np.float64)
+    om_e = _turn_rate(v_in_e, v_end, span_e)
+    om_s = _turn_rate(v_start, v_in_s, span_s)
     need_d = dest < 0
-    ok_d = need_d & (np.hypot(v_end[:, 0], v_end[:, 1]) >= st.min_speed)
-    hit = _first_hit(p[end_row[ok_d]], v_end[ok_d], approaches, origin[ok_d], steps)
-    dest[ok_d] = hit
+    ok_d = need_d & ~in_any_end & (np.hypot(v_end[:, 0], v_end[:, 1]) >= st.min_speed)
+    dest[ok_d] = _first_hit(p[end_row[ok_d]], v_end[ok_d], om_e[ok_d], approaches,
+                            origin[ok_d], steps, max_turn)
     need_o = origin < 0
-    ok_o = need_o & (np.hypot(v_start[:, 0], v_start[:, 1]) >= st.min_speed)
-    hit = _first_hit(p[start_row[ok_o]], -v_start[ok_o], approaches, dest[ok_o], steps)
-    origin[ok_o] = hit
+    ok_o = need_o & ~in_any_start & (np.hypot(v_start[:, 0], v_start[:, 1]) >= st.min_speed)
+    # backwards: reverse the velocity; the turn then runs the other way in time
+    origin[ok_o] = _first_hit(p[start_row[ok_o]], -v_start[ok_o], om_s[ok_o], approaches,
+                              dest[ok_o], steps, max_turn)
     return TrackMovements(
         tracks.ids, origin, dest, need_o & (origin >= 0), need_d & (dest >= 0),
         origin_frame.astype(np.int64), names, turns,

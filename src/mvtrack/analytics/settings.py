@@ -176,10 +176,10 @@ def settings_from_dict(data: dict[str, Any], path: str | os.PathLike[str] = "<se
                                         "(four or more point pairs)")
 
     if "speed" in data:
-        sp = c.table("speed", data["speed"], ("smooth", "stop_z", "stop_max", "anchor",
-                                               "velocity"))
+        sp = c.table("speed", data["speed"], ("smooth", "stop_z", "stop_max", "stop_min",
+                                               "anchor", "velocity"))
         skw: dict[str, Any] = {}
-        for key in ("smooth", "stop_z", "stop_max"):
+        for key in ("smooth", "stop_z", "stop_max", "stop_min"):
             if key in sp:
                 skw[key] = c.number(f"speed.{key}", sp[key], positive=key == "smooth",
                                     minimum=0.0)
@@ -191,9 +191,10 @@ def settings_from_dict(data: dict[str, Any], path: str | os.PathLike[str] = "<se
 
     if "movements" in data:
         mv = c.table("movements", data["movements"],
-                     ("horizon", "window", "gap", "min_speed", "centre"))
+                     ("horizon", "window", "gap", "min_speed", "max_turn",
+                      "centre"))
         mkw: dict[str, Any] = {}
-        for key in ("horizon", "window", "gap", "min_speed"):
+        for key in ("horizon", "window", "gap", "min_speed", "max_turn"):
             if key in mv:
                 mkw[key] = c.number(f"movements.{key}", mv[key], minimum=0.0)
         if "centre" in mv:

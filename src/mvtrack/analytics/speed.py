@@ -20,8 +20,9 @@ For row ``i`` of a track, with foot point ``p_i`` (bottom centre of the box):
 5. rows whose foot point lies outside the calibrated region (the hull of the calibration's
    image points) get no speed: the homography is not known to hold there;
 6. a row is *stopped* when the tracker says so (``TrackState.STOPPED``, held by template
-   matching) or when its speed is not distinguishable from zero, ``speed < z σ``, and below
-   ``stop_max`` km/h; stopped rows read 0. A slow vehicle (a few km/h, well measured) keeps
+   matching), when its speed is below ``stop_min`` (1 km/h), or when it is not
+   distinguishable from zero, ``speed < z σ``, and below ``stop_max`` km/h; stopped rows
+   read 0. A slow vehicle (a few km/h, well measured) keeps
    its speed.
 
 Why the fit and not the filter's velocity by default: on the synthetic speed scene
@@ -63,7 +64,9 @@ class SpeedSettings:
     stop_z : float
         A row is stopped when its speed is below ``stop_z`` standard errors ...
     stop_max : float
-        ... and below this many km/h.
+        ... and below this many km/h;
+    stop_min : float
+        a row below this many km/h is stopped whatever its error.
     anchor : {"foot", "centre"}
         The point of the box whose ground speed is measured.
     velocity : {"fit", "filter"}
@@ -75,6 +78,7 @@ class SpeedSettings:
     smooth: float = 1.0
     stop_z: float = 2.0
     stop_max: float = 4.0
+    stop_min: float = 1.0
     anchor: str = "foot"
     velocity: str = "fit"
 
@@ -129,14 +133,16 @@ def row_speeds(
     if st.anchor == "foot":
         meas = meas + np.column_stack([np.zeros(k), tracks.wh[:, 1] / 2])
     fit = local_fit(tracks.frame, tracks.track_id, meas, m, weight=tracks.measured)  # step 1
-    vbar, _ = local_mean(tracks.frame, tracks.track_id, tracks.velocity, m)  # step 2
-    if st.anchor == "foot":  # the foot moves with the centre plus half the height's growth
-        dh = local_fit(tracks.frame, tracks.track_id, tracks.wh, m).slope[:, 1]
-        vbar = vbar + np.column_stack([np.zeros(k), np.nan_to_num(dh) / 2])
     use_fit = (fit.n >= 3) & np.isfinite(fit.slope).all(axis=1)
     if st.velocity == "filter":
         use_fit[:] = False
-    v = np.where(use_fit[:, None], fit.slope, vbar)
+    v = fit.slope
+    if not use_fit.all():  # step 2
+        vbar, _ = local_mean(tracks.frame, tracks.track_id, tracks.velocity, m)
+        if st.anchor == "foot":  # the foot moves with the centre plus half the height's growth
+            dh = local_fit(tracks.frame, tracks.track_id, tracks.wh, m).slope[:, 1]
+            vbar = vbar + np.column_stack([np.zeros(k), np.nan_to_num(dh) / 2])
+        v = np.where(use_fit[:, None], fit.slope, vbar)
     jac = calibration.jacobian(p)
     g = np.einsum("kij,kj->ki", jac, v) * fps  # step 3: m/s
     raw = KMH * np.hypot(g[:, 0], g[:, 1])
@@ -148,7 +154,7 @@ def row_speeds(
         var = np.where(np.isfinite(along), along, iso)
     sigma = KMH * np.sqrt(var)
     outside = ~calibration.calibrated(p)  # step 5
-    stopped = (tracks.state == int(TrackState.STOPPED)) | (  # step 6
+    stopped = (tracks.state == int(TrackState.STOPPED)) | (raw < st.stop_min) | (  # step 6
         (raw < st.stop_max) & (raw < st.stop_z * np.where(np.isfinite(sigma), sigma, 0.0))
     )
     speed = np.where(stopped, 0.0, raw)

@@ -261,14 +261,15 @@ class LocalFit:
 
 
 def _offsets(frame: IntArray, track_id: IntArray, half: int):  # type: ignore[no-untyped-def]
-    """Yield ``(j, ok)`` for every offset ``o = -half .. half``: the row ``j = i + o`` (clipped)
-    and whether it belongs to the same track within ``half`` frames of row ``i``."""
+    """Yield ``(lo, hi, ok)`` for every offset ``o = 1 .. half``: the row pairs ``(i, i + o)``
+    as the slices ``lo = [0, K - o)`` and ``hi = [o, K)``, and whether the two rows belong to
+    the same track within ``half`` frames of each other. Windows are symmetric, so each pair
+    serves both of its rows."""
     k = frame.shape[0]
-    i = np.arange(k)
-    for o in range(-half, half + 1):
-        j = np.clip(i + o, 0, max(k - 1, 0))
-        ok = (track_id[j] == track_id) & (np.abs(frame[j] - frame) <= half) & ((i + o) == j)
-        yield j, ok
+    for o in range(1, min(half, max(k - 1, 0)) + 1):
+        lo, hi = slice(0, k - o), slice(o, k)
+        ok = (track_id[hi] == track_id[lo]) & (frame[hi] - frame[lo] <= half)
+        yield lo, hi, ok
 
 
 def local_fit(
@@ -283,32 +284,41 @@ def local_fit(
     coordinates of any size keep full precision.
     """
     k = frame.shape[0]
-    n = np.zeros(k)
-    st = np.zeros(k)
-    stt = np.zeros(k)
-    sx = np.zeros((k, 2))
-    stx = np.zeros((k, 2))
-    sxx = np.zeros(k)
     use = np.ones(k, bool) if weight is None else np.asarray(weight, bool)
-    base = np.where(np.isfinite(xy), xy, 0.0)
-    for j, ok in _offsets(frame, track_id, half):
-        ok = ok & use[j]
-        w = ok.astype(np.float64)
-        dt = (frame[j] - frame) * w
-        dx = (base[j] - base) * w[:, None]
-        n += w
-        st += dt
-        stt += dt * dt
-        sx += dx
-        stx += dt[:, None] * dx
-        sxx += (dx * dx).sum(axis=1)
+    use = use & np.isfinite(xy).all(axis=1)
+    x = np.where(use, xy[:, 0], 0.0)
+    y = np.where(use, xy[:, 1], 0.0)
+    f = frame.astype(np.float64)
+    w0 = use.astype(np.float64)
+    n, st, stt = w0.copy(), np.zeros(k), np.zeros(k)
+    sx, sy, stx, sty, sxx = (np.zeros(k) for _ in range(5))
+    for lo, hi, ok in _offsets(frame, track_id, half):
+        dt = f[hi] - f[lo]
+        dx = x[hi] - x[lo]
+        dy = y[hi] - y[lo]
+        dd = dx * dx + dy * dy
+        for a, b in ((lo, hi), (hi, lo)):  # row a gains its neighbour b (sign of dt, dx flips)
+            w = ok & use[b]
+            sgn = 1.0 if a is lo else -1.0
+            wf = w.astype(np.float64)
+            n[a] += wf
+            st[a] += sgn * dt * wf
+            stt[a] += dt * dt * wf
+            sx[a] += sgn * dx * wf
+            sy[a] += sgn * dy * wf
+            stx[a] += dt * dx * wf
+            sty[a] += dt * dy * wf
+            sxx[a] += dd * wf
     with np.errstate(invalid="ignore", divide="ignore"):
-        sdd = stt - st * st / np.maximum(n, 1)  # Σ (t - t̄)²
-        b = (stx - st[:, None] * sx / np.maximum(n, 1)[:, None]) / sdd[:, None]
+        nn = np.maximum(n, 1)
+        sdd = stt - st * st / nn  # Σ (t - t̄)²
+        bx = (stx - st * sx / nn) / sdd
+        by = (sty - st * sy / nn) / sdd
         # RSS = Σ (x - x̄)² - b² Σ (t - t̄)², summed over both axes
-        rss = sxx - (sx * sx).sum(axis=1) / np.maximum(n, 1) - (b * b).sum(axis=1) * sdd
+        rss = sxx - (sx * sx + sy * sy) / nn - (bx * bx + by * by) * sdd
         s2 = np.maximum(rss, 0.0) / (2.0 * (n - 2))
         se = np.sqrt(s2 / sdd)
+    b = np.column_stack([bx, by])
     b[~(sdd > 0)] = np.nan
     se[n < 3] = np.nan
     return LocalFit(b, se, n.astype(np.int64), np.where(n >= 3, np.sqrt(s2), np.nan))
@@ -317,16 +327,20 @@ def local_fit(
 def local_mean(
     frame: IntArray, track_id: IntArray, values: FloatArray, half: int,
 ) -> tuple[FloatArray, IntArray]:
-    """Mean of ``values`` (K, ...) over each row's window of ``± half`` frames of its track
-    (NaN values left out), and the number of values averaged."""
-    acc = np.zeros(values.shape)
-    cnt = np.zeros(values.shape[0])
-    finite = np.isfinite(values).reshape(values.shape[0], -1).all(axis=1)
-    base = np.where(finite.reshape((-1,) + (1,) * (values.ndim - 1)), values, 0.0)
-    for j, ok in _offsets(frame, track_id, half):
-        ok = ok & finite[j]
-        acc += base[j] * ok.reshape((-1,) + (1,) * (values.ndim - 1))
-        cnt += ok
+    """Mean of ``values`` (K, d) over each row's window of ``± half`` frames of its track
+    (rows with a NaN left out), and the number of rows averaged."""
+    vals = np.asarray(values, np.float64).reshape(values.shape[0], -1)
+    finite = np.isfinite(vals).all(axis=1)
+    base = np.where(finite[:, None], vals, 0.0)
+    cols = [base[:, c].copy() for c in range(base.shape[1])]
+    acc = [c.copy() for c in cols]
+    cnt = finite.astype(np.float64)
+    for lo, hi, ok in _offsets(frame, track_id, half):
+        for a, b in ((lo, hi), (hi, lo)):
+            w = (ok & finite[b]).astype(np.float64)
+            cnt[a] += w
+            for c in range(len(cols)):
+                acc[c][a] += cols[c][b] * w
     with np.errstate(invalid="ignore", divide="ignore"):
-        mean = acc / cnt.reshape((-1,) + (1,) * (values.ndim - 1))
-    return mean, cnt.astype(np.int64)
+        mean = np.column_stack(acc) / cnt[:, None]
+    return mean.reshape(values.shape), cnt.astype(np.int64)
