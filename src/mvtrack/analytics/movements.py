@@ -189,7 +189,7 @@ def track_movements(
         return TrackMovements(tracks.ids, z, z.copy(), f, f.copy(),
                               tracks.frame[tracks.starts[:-1]], names, turns)
     p = tracks.anchor(anchor)
-    gap = int(round(st.gap * fps))
+    gap = round(st.gap * fps)
     # every visit to every approach, then sorted by track and time
     parts = []
     for a, zone in enumerate(approaches):  # a handful of approaches, vectorised over rows
@@ -207,7 +207,7 @@ def track_movements(
 
     start_row, end_row = tracks.starts[:-1], tracks.starts[1:] - 1
     # heading at each end: mean velocity over the first / last `window` seconds
-    half = max(1, int(round(st.window * fps)))
+    half = max(1, round(st.window * fps))
     vmean, _ = local_mean(tracks.frame, tracks.track_id, tracks.velocity, half)
     v_end = np.nan_to_num(vmean[end_row])
     v_start = np.nan_to_num(vmean[start_row])
@@ -241,7 +241,7 @@ def track_movements(
     for zone in approaches:
         in_any_end |= zone.contains(p[end_row])
         in_any_start |= zone.contains(p[start_row])
-    steps = int(round(st.horizon * fps))
+    steps = round(st.horizon * fps)
     max_turn = np.radians(st.max_turn)
     # heading and turn rate at each end, from the smoothed velocity one window apart
     inner_end = np.maximum(end_row - half, start_row)

@@ -29,7 +29,6 @@ from mvtrack.analytics.settings import AnalyticsSettings
 from mvtrack.analytics.speed import (
     RowSpeeds,
     TrackSpeeds,
-    group_quantile,
     group_stats,
     row_speeds,
     track_speeds,
@@ -171,7 +170,7 @@ def analyse(
                 emit("line", line.name, line.label(direction), cname, cnt, s["mean"],
                      s["p85"], nan, nan, nan)
     p_anchor = pts.anchor(anchor)
-    gap = int(round(settings.movements.gap * fps))
+    gap = round(settings.movements.gap * fps)
     for zone in settings.zones:
         inside = zone.contains(p_anchor)
         v = zone_visits(inside, pts, gap)
@@ -333,7 +332,7 @@ def analyse_folder(folder: str | os.PathLike[str], settings: AnalyticsSettings,
         raise InputError(f"{folder}: frame rate unknown: set analytics.fps in the settings "
                          "or pass --fps")
     table = read_tracks(results, "results")
-    pts = TrackPoints.from_mot(table, window=max(1, int(round(settings.speed.smooth * fps / 2))))
+    pts = TrackPoints.from_mot(table, window=max(1, round(settings.speed.smooth * fps / 2)))
     frames = info.get("frames")
     n_frames = int(frames) if isinstance(frames, int) and frames > 0 else None
     if n_frames is not None and len(pts):

@@ -89,7 +89,7 @@ class SpeedSettings:
 
     def half_window(self, fps: float) -> int:
         """Half-width ``m`` of the window in frames (at least 1)."""
-        return max(1, int(round(self.smooth * fps / 2.0)))
+        return max(1, round(self.smooth * fps / 2.0))
 
 
 @dataclass(frozen=True)
