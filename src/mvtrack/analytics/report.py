@@ -85,8 +85,9 @@ def counts_figure(result: AnalyticsResult) -> Any:
         per = np.bincount(c["interval"][s].astype(int), c["count"][s].astype(float), n_int)
         ax.bar(np.arange(n_int) + k * width - 0.4 + width / 2, per, width,
                label=f"{name} {direction}")
-    ax.set_xticks(range(n_int), [f"{i * result.interval / 60:g}" for i in range(n_int)])
-    ax.set_xlabel(f"interval start (min; {result.interval:g} s each)")
+    starts = [i * result.interval for i in range(n_int)]
+    ax.set_xticks(range(n_int), [f"{int(t // 60)}:{int(t % 60):02d}" for t in starts])
+    ax.set_xlabel(f"interval start (min:s; {result.interval:g} s each)")
     ax.set_ylabel("crossings")
     if keys:
         ax.legend(fontsize=8)
