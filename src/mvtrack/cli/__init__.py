@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from mvtrack.cli import batch, demo, evaluate, experiment, simulate, track, track_detections
+from mvtrack.cli import batch, demo, evaluate, experiment, report, simulate, track, track_detections
 
 app = typer.Typer(
     name="mvtrack",
@@ -44,7 +44,7 @@ def _root(
     """Track many moving objects in fixed-camera video, and compare predictors honestly."""
 
 
-for _module in (demo, track, track_detections, batch, evaluate, simulate, experiment):
+for _module in (demo, track, track_detections, batch, evaluate, simulate, experiment, report):
     _module.register(app)
 
 # Typer ships its own copy of Click; find its exception classes through a public name.
