@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from mvtrack.detection.adaptive import GaussianBackground, temporal_median
 from mvtrack.detection.sizeprior import SizePrior
-from mvtrack.detection.splitmerge import PLAIN, _overlap, split_merge
+from mvtrack.detection.splitmerge import PLAIN, SPLIT, _overlap, split_merge
 from mvtrack.types import Detections, TrackFrame, TrackState
 
 Image = NDArray[np.uint8]
@@ -54,9 +54,12 @@ class SceneFrontEnd:
         The size prior, in working pixels (default: ``SizePrior()``); shared with
         :func:`detect_with_tracker`, which teaches it.
     close_size : int, default 5
-        Closing diameter (working pixels) until the prior has samples.
-    close_frac : float, default 0.1
-        Closing diameter as a fraction of the prior's median sample height.
+        Closing width (working pixels); people are upright, so the kernel is taller than wide.
+    close_aspect : float, default 2
+        Closing height over its width.
+    close_frac : float, default 0.15
+        Closing height as a fraction of the prior's median sample height, once it has
+        samples (if larger).
     min_area : float, default 30
         Smallest blob, working pixels.
     trim : float, default 0.2
@@ -65,6 +68,13 @@ class SceneFrontEnd:
         Run :func:`split_merge` (with the predicted boxes and the prior).
     reject : bool, default True
         Drop implausible boxes once the prior is ready.
+    split_params : dict or None
+        Keywords of :func:`~mvtrack.detection.splitmerge.split_merge` (``inside``,
+        ``cover``, ``wide``, ``max_parts``).
+    verify : float or None, default None
+        If set, a split box whose HOG people-detector margin
+        (:func:`~mvtrack.detection.hog.hog_scores`, on the input frame) is below this value
+        is dropped: the HOG detector as a verifier of split blobs only.
 
     Attributes
     ----------
@@ -85,11 +95,14 @@ class SceneFrontEnd:
         prior: SizePrior | None = None,
         *,
         close_size: int = 5,
-        close_frac: float = 0.1,
+        close_aspect: float = 2.0,
+        close_frac: float = 0.15,
         min_area: float = 30.0,
         trim: float = 0.2,
         split: bool = True,
         reject: bool = True,
+        verify: float | None = None,
+        split_params: dict[str, float] | None = None,
     ) -> None:
         if work_pixels < 0:
             raise ValueError(f"work_pixels must be >= 0, got {work_pixels}")
@@ -102,10 +115,14 @@ class SceneFrontEnd:
         self.prior = SizePrior() if prior is None else prior
         self.close_size = int(close_size)
         self.close_frac = float(close_frac)
+        self.close_aspect = float(close_aspect)
         self.min_area = float(min_area)
         self.trim = float(trim)
         self.split = bool(split)
         self.reject = bool(reject)
+        self.verify = None if verify is None else float(verify)
+        self.split_params = dict(split_params or {})
+        self._hog: Any = None
         self.frames_seen = 0
         self.flags = np.zeros(0, np.int8)
         self.mask: Image | None = None
@@ -161,16 +178,32 @@ class SceneFrontEnd:
         self.mask = None
 
     def learn(self, tlwh: FloatArray) -> None:
-        """Teach the size prior boxes (input pixels) of isolated objects."""
-        self.prior.update(self.to_work(tlwh))
+        """Teach the size prior boxes (input pixels) of isolated objects.
+
+        Boxes that touch the left, right or top border are left out: the object may be cut
+        by it. One cut by the bottom border is kept: its foot row is the last row, and a box
+        standing there will be cut the same way.
+        """
+        b = self.to_work(tlwh)
+        if self.mask is not None and len(b):
+            w = self.mask.shape[1]
+            inside = (b[:, 0] > 0.5) & (b[:, 1] > 0.5)
+            inside &= b[:, 0] + b[:, 2] < w - 1.5
+            b = b[inside]
+        self.prior.update(b)
 
     def _closing(self) -> NDArray[np.uint8] | None:
+        """Elliptic kernel ``close_size`` wide and ``close_aspect`` times as tall; once the
+        prior has samples, ``close_frac`` of their median height tall if that is larger."""
         size = self.close_size
+        tall = round(self.close_aspect * size)
         if self.prior.n_samples >= self.prior.min_samples:
             heights = self.prior._buf[: self.prior.n_samples, 2]
-            size = max(size, int(round(self.close_frac * float(np.median(heights)))))
-        size = max(size, 0) | 1
-        return None if size <= 1 else cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size,) * 2)
+            tall = max(tall, round(self.close_frac * float(np.median(heights))))
+        size, tall = max(size, 0) | 1, max(tall, 0) | 1
+        if size <= 1 and tall <= 1:
+            return None
+        return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, tall))
 
     # ------------------------------------------------------------------ frames
     def __call__(
@@ -193,13 +226,21 @@ class SceneFrontEnd:
         flags = np.full(len(boxes), PLAIN, np.int8)
         if self.split and len(boxes):
             pred = None if predicted is None else self.to_work(predicted)
-            boxes, flags = split_merge(boxes, mask, pred, self.prior)
+            boxes, flags = split_merge(boxes, mask, pred, self.prior, **self.split_params)
             area = boxes[:, 2] * boxes[:, 3]
         if self.reject and len(boxes):
             ok = self.prior.plausible(boxes)
             boxes, flags, area = boxes[ok], flags[ok], area[ok]
-        self.flags = flags
         out = self.to_input(boxes)
+        if self.verify is not None and (flags == SPLIT).any():
+            from mvtrack.detection.hog import _hog, hog_scores
+
+            self._hog = _hog() if self._hog is None else self._hog
+            cand = np.flatnonzero(flags == SPLIT)
+            ok = np.ones(len(out), bool)
+            ok[cand] = hog_scores(frame, out[cand], self._hog) >= self.verify
+            out, flags, area = out[ok], flags[ok], area[ok]
+        self.flags = flags
         return Detections(k, out[:, :2] + out[:, 2:] / 2, out[:, 2:], None, area / self.scale**2)
 
     def _blobs(self, mask: Image) -> tuple[FloatArray, FloatArray]:
@@ -212,7 +253,7 @@ class SceneFrontEnd:
         boxes = np.column_stack([st[:, 0] - 0.5, st[:, 1] - 0.5, st[:, 2], st[:, 3]])
         area = st[:, 4]
         if self.trim > 0:
-            h, w = mask.shape
+            _h, w = mask.shape
             lab = labels[mask > 0]
             col = np.nonzero(mask)[1]
             counts = np.bincount(lab * w + col, minlength=n * w).reshape(n, w)[keep]
@@ -295,7 +336,9 @@ def detect_with_tracker(
 
 
 def two_pass(
-    frames: Sequence[Image], make_frontend: Callable[[], SceneFrontEnd], make_tracker: Callable[[], Any]
+    frames: Sequence[Image],
+    make_frontend: Callable[[], SceneFrontEnd],
+    make_tracker: Callable[[], Any],
 ) -> tuple[list[Detections], SceneFrontEnd]:
     """Offline: bootstrap on the clip's median, learn the prior in a first pass, detect again.
 

@@ -6,13 +6,14 @@ the horizon (a pinhole camera with small tilt; for a walker the width follows li
 
 .. math::
 
-    h(y) = a_h + b_h y, \qquad w(y) = a_w + b_w y.   \qquad (1)
+    h(y) = a_h + b_h y, \qquad w(y) = \rho\, h(y).   \qquad (1)
 
 :class:`SizePrior` fits eq. (1) online to the boxes of isolated confirmed tracks (the caller
 chooses them): the last ``capacity`` samples are kept in a ring buffer and refitted every
 ``refit_every`` new ones by iteratively reweighted least squares with Tukey's biweight on the
 residuals in units of their median absolute deviation, so a box that holds two people, or a
-person and their shadow, does not pull the line. The fit is *ready* once it has
+person and their shadow, does not pull the line; :math:`\rho` is the median of the samples'
+``w / h``. The fit is *ready* once it has
 ``min_samples`` samples spread over at least ``min_spread`` rows.
 """
 
@@ -56,6 +57,35 @@ def robust_line(
     return a, b, s
 
 
+def quantile_line(
+    x: FloatArray, y: FloatArray, q: float = 0.75, iterations: int = 30
+) -> tuple[float, float, float]:
+    """``(a, b, s)``: the ``q``-quantile line ``y = a + b x`` (pinball loss, by IRLS).
+
+    Weights ``q / |r|`` above the line and ``(1 - q) / |r|`` below it (residuals floored at
+    1e-3 of their scale), starting from :func:`robust_line`; ``s`` as there. Partial bodies
+    are the common outlier of blob sizes (a person whose legs match the pavement), so the
+    fit of the upper quantile follows whole objects.
+    """
+    x = np.asarray(x, np.float64)
+    y = np.asarray(y, np.float64)
+    a, b, s = robust_line(x, y)
+    design = np.column_stack([np.ones_like(x), x])
+    floor = max(1e-3 * s, 1e-6)
+    for _ in range(iterations):
+        r = y - (a + b * x)
+        w = np.where(r > 0, q, 1.0 - q) / np.maximum(np.abs(r), floor)
+        sw = np.sqrt(w)
+        coef, *_ = np.linalg.lstsq(design * sw[:, None], y * sw, rcond=None)
+        a_new, b_new = float(coef[0]), float(coef[1])
+        done = abs(a_new - a) + abs(b_new - b) * (np.abs(x).max() + 1) < 1e-3
+        a, b = a_new, b_new
+        if done:
+            break
+    r = y - (a + b * x)
+    return a, b, 1.4826 * float(np.median(np.abs(r - np.median(r))))
+
+
 class SizePrior:
     """Online robust fit of eq. (1): expected box width and height at each foot row.
 
@@ -70,11 +100,15 @@ class SizePrior:
         (a line through one row has no slope).
     refit_every : int, default 10
         New samples between two fits.
+    quantile : float or None, default 0.75
+        Fit the height line to this quantile (:func:`quantile_line`); None fits the middle
+        with Tukey's biweight (:func:`robust_line`).
 
     Attributes
     ----------
     coef : (2, 2) float64
-        ``[[a_w, b_w], [a_h, b_h]]`` of eq. (1) (NaN until the first fit).
+        ``[[ρ a_h, ρ b_h], [a_h, b_h]]`` of eq. (1): width and height lines (NaN until the
+        first fit).
     scale : (2,) float64
         Robust standard deviation of the width and height residuals, pixels.
     """
@@ -85,6 +119,7 @@ class SizePrior:
         min_samples: int = 30,
         min_spread: float = 20.0,
         refit_every: int = 10,
+        quantile: float | None = 0.75,
     ) -> None:
         if capacity < 2 or min_samples < 2 or min_samples > capacity or refit_every < 1:
             raise ValueError(
@@ -97,6 +132,9 @@ class SizePrior:
         self.min_samples = int(min_samples)
         self.min_spread = float(min_spread)
         self.refit_every = int(refit_every)
+        if quantile is not None and not 0.0 < quantile < 1.0:
+            raise ValueError(f"quantile must be in (0, 1) or None, got {quantile}")
+        self.quantile = quantile
         self.reset()
 
     def reset(self) -> None:
@@ -145,10 +183,16 @@ class SizePrior:
         lo, hi = np.percentile(foot, [10, 90])
         if hi - lo < self.min_spread:
             return
-        for i in (0, 1):
-            a, b, s = robust_line(foot, data[:, 1 + i])
-            self.coef[i] = a, b
-            self.scale[i] = s
+        if self.quantile is None:
+            a, b, s = robust_line(foot, data[:, 2])
+        else:
+            a, b, s = quantile_line(foot, data[:, 2], self.quantile)
+        if not b > 0:  # objects farther away (higher up) must look smaller
+            return
+        rho = float(np.median(data[:, 1] / data[:, 2]))
+        self.coef[1] = a, b
+        self.coef[0] = rho * a, rho * b
+        self.scale[:] = rho * s, s
         self._ready = True
 
     def expected(self, foot_row: ArrayLike) -> FloatArray:

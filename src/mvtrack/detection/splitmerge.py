@@ -28,6 +28,8 @@ Boxes are ``(left, top, width, height)`` with pixel ``(col, row)`` covering
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -97,6 +99,57 @@ def merge_fragments(
     return out, out_flags
 
 
+def merge_stacked(
+    boxes: FloatArray,
+    flags: NDArray[np.int8],
+    prior: SizePrior,
+    overlap: float = 0.5,
+    tall: float = 1.25,
+    broad: float = 1.4,
+) -> tuple[FloatArray, NDArray[np.int8]]:
+    """Merge blobs stacked one above the other into one object of the prior's size.
+
+    A person whose belt or trousers match the background falls apart into pieces one above
+    the other. Two blobs are joined when their columns overlap by ``overlap`` of the narrower
+    one and their union is at most ``tall`` times the expected height and ``broad`` times the
+    expected width at its foot row; joined pairs are grouped transitively
+    (``scipy.sparse.csgraph.connected_components``) and each group that still fits becomes its
+    union, flagged :data:`MERGED`.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = len(boxes)
+    if m < 2 or not prior.ready:
+        return boxes, flags
+    lo, hi = boxes[:, :2], boxes[:, :2] + boxes[:, 2:]
+    ov = np.minimum(hi[:, None, 0], hi[None, :, 0]) - np.maximum(lo[:, None, 0], lo[None, :, 0])
+    ov = np.clip(ov, 0.0, None)
+    narrow = np.minimum(boxes[:, None, 2], boxes[None, :, 2])
+    ulo = np.minimum(lo[:, None, :], lo[None, :, :])
+    uhi = np.maximum(hi[:, None, :], hi[None, :, :])
+    exp = prior.expected(uhi[..., 1].ravel()).reshape(m, m, 2)
+    ok = (ov >= overlap * narrow) & ((uhi - ulo) <= exp * np.array([broad, tall])).all(axis=2)
+    np.fill_diagonal(ok, False)
+    if not ok.any():
+        return boxes, flags
+    i, j = np.nonzero(ok)
+    graph = coo_matrix((np.ones(len(i)), (i, j)), shape=(m, m))
+    n, comp = connected_components(graph, directed=False)
+    size = np.bincount(comp, minlength=n)
+    glo = np.full((n, 2), np.inf)
+    ghi = np.full((n, 2), -np.inf)
+    np.minimum.at(glo, comp, lo)
+    np.maximum.at(ghi, comp, hi)
+    union = np.column_stack([glo, ghi - glo])
+    fits = (union[:, 2:] <= prior.expected(ghi[:, 1]) * np.array([broad, tall])).all(axis=1)
+    joined = (size >= 2) & fits
+    gone = joined[comp]
+    out = np.concatenate([union[joined], boxes[~gone]])
+    out_flags = np.concatenate([np.full(int(joined.sum()), MERGED, np.int8), flags[~gone]])
+    return out, out_flags
+
+
 def _pixels(mask: NDArray[np.uint8], box: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Columns and rows (image coordinates) of the foreground pixels inside ``box``."""
     h, w = mask.shape
@@ -109,9 +162,8 @@ def _pixels(mask: NDArray[np.uint8], box: FloatArray) -> tuple[FloatArray, Float
 
 
 def _extent(cols: FloatArray, rows: FloatArray) -> FloatArray:
-    return np.array(
-        [cols.min() - 0.5, rows.min() - 0.5, cols.max() - cols.min() + 1, rows.max() - rows.min() + 1]
-    )
+    c0, r0 = cols.min(), rows.min()
+    return np.array([c0 - 0.5, r0 - 0.5, cols.max() - c0 + 1, rows.max() - r0 + 1])
 
 
 def split_by_tracks(
@@ -142,30 +194,64 @@ def split_by_tracks(
     return out
 
 
-def split_by_width(box: FloatArray, mask: NDArray[np.uint8], k: int) -> FloatArray:
-    """Step 3 for one blob: ``k`` parts cut at the emptiest columns near ``left + i w / k``."""
+def split_by_width(
+    box: FloatArray, mask: NDArray[np.uint8], k: int, valley: float = 0.85
+) -> FloatArray:
+    """Step 3 for one blob: up to ``k`` parts, cut where the silhouette dips between heads.
+
+    The silhouette height of column ``c`` is the blob's bottom minus the top-most foreground
+    row of the column. Near each equally spaced cut ``left + i w / k`` (within 30 % of a
+    part's width) the lowest column is the candidate cut; it is kept only if it is at most
+    ``valley`` times the lower of the highest columns on either side (two heads with a dip
+    between them), so a single wide walker (arms and legs apart) is not cut.
+    """
     cols, rows = _pixels(mask, box)
     if cols.size == 0 or k < 2:
         return box[None, :].copy()
     c0 = int(cols.min())
     width = int(cols.max()) - c0 + 1
-    profile = np.bincount((cols - c0).astype(np.int64), minlength=width).astype(np.float64)
-    profile = np.convolve(profile, np.ones(3) / 3, mode="same")
+    rel = (cols - c0).astype(np.int64)
+    top = np.full(width, np.inf)
+    np.minimum.at(top, rel, rows)
+    bottom = rows.max()
+    height = np.where(np.isfinite(top), bottom - top + 1, 0.0)
+    height = np.convolve(height, np.ones(3) / 3, mode="same")
     step = width / k
     reach = max(int(0.3 * step), 1)
     cuts = [0]
     for i in range(1, k):  # k − 1 cuts of one blob
-        nominal = int(round(i * step))
-        lo, hi = max(nominal - reach, cuts[-1] + 1), min(nominal + reach, width - 1)
-        cuts.append(lo + int(np.argmin(profile[lo : hi + 1])) if hi >= lo else nominal)
+        nominal = round(i * step)
+        lo, hi = max(nominal - reach, cuts[-1] + 1), min(nominal + reach, width - 2)
+        if hi < lo:
+            continue
+        cut = lo + int(np.argmin(height[lo : hi + 1]))
+        left_peak = height[cuts[-1] : cut].max(initial=0.0)
+        right_peak = height[cut + 1 : min(cut + 1 + int(step), width)].max(initial=0.0)
+        if height[cut] <= valley * min(left_peak, right_peak):
+            cuts.append(cut)
     cuts.append(width)
+    if len(cuts) == 2:
+        return box[None, :].copy()
     parts = []
-    rel = cols - c0
-    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+    for a, b in itertools.pairwise(cuts):
         sel = (rel >= a) & (rel < b)
         if sel.any():
             parts.append(_extent(cols[sel], rows[sel]))
     return np.array(parts) if parts else box[None, :].copy()
+
+
+def _distinct(pred: FloatArray, same: float = 0.5) -> FloatArray:
+    """Predicted boxes without duplicates: of two boxes that share ``same`` of the smaller
+    one's area (two tracks on one object, or on a part and the whole), the larger is kept."""
+    if len(pred) < 2:
+        return pred
+    area = pred[:, 2:].prod(axis=1)
+    share = _overlap(pred, pred) / np.minimum(area[:, None], area[None, :])
+    np.fill_diagonal(share, 0.0)
+    smaller = area[:, None] < area[None, :]
+    order = np.arange(len(pred))
+    smaller |= (area[:, None] == area[None, :]) & (order[:, None] > order[None, :])
+    return pred[~((share >= same) & smaller).any(axis=1)]
 
 
 def split_merge(
@@ -176,8 +262,9 @@ def split_merge(
     *,
     inside: float = 0.6,
     cover: float = 0.5,
-    wide: float = 1.7,
+    wide: float = 1.8,
     max_parts: int = 6,
+    valley: float = 0.85,
 ) -> tuple[FloatArray, NDArray[np.int8]]:
     """Object boxes from the blobs of one frame (module docstring, steps 1–3).
 
@@ -196,7 +283,10 @@ def split_merge(
     cover : float
         Step 2's share of a predicted box inside a blob for the track to claim part of it.
     wide : float
-        Step 3's width, relative to the prior's, from which a blob is cut.
+        Step 3's width, relative to the prior's, from which a blob is cut; predicted boxes
+        ``max(wide, 1.8)`` times as wide are not used (a track on a blob of two).
+    valley : float
+        Step 3's dip of the silhouette (:func:`split_by_width`).
     max_parts : int
         Most parts step 3 cuts a blob into.
 
@@ -214,7 +304,13 @@ def split_merge(
         else np.asarray(predicted_boxes, np.float64).reshape(-1, 4)
     )
     pred = pred[(pred[:, 2] > 0) & (pred[:, 3] > 0) & np.isfinite(pred).all(axis=1)]
+    if size_prior is not None and size_prior.ready and len(pred):
+        # a track that follows a blob of two people predicts a box of two: not one object
+        pred = pred[size_prior.ratio(pred)[:, 0] < max(wide, 1.8)]
+    pred = _distinct(pred)
     boxes, flags = merge_fragments(boxes, pred, inside)
+    if size_prior is not None:
+        boxes, flags = merge_stacked(boxes, flags, size_prior)
     if len(boxes) == 0:
         return boxes, flags
     k_of = np.zeros(len(boxes), np.int64)
@@ -226,7 +322,8 @@ def split_merge(
     wide_k = np.zeros(len(boxes), np.int64)
     if size_prior is not None and size_prior.ready:
         r = size_prior.ratio(boxes)[:, 0]
-        wide_k = np.where(r >= wide, np.minimum(np.round(r), max_parts), 0).astype(np.int64)
+        k = np.clip(np.round(r), 2, max_parts)
+        wide_k = np.where(r >= wide, k, 0).astype(np.int64)
     todo = np.flatnonzero((k_of >= 2) | (wide_k >= 2))
     if todo.size == 0:
         return boxes, flags
@@ -239,7 +336,7 @@ def split_merge(
             mine = np.flatnonzero(claims & (home == i))
             parts = split_by_tracks(boxes[i], mask, pred[mine])
         else:
-            parts = split_by_width(boxes[i], mask, int(wide_k[i]))
+            parts = split_by_width(boxes[i], mask, int(wide_k[i]), valley)
         new.append(parts)
         new_flags.append(np.full(len(parts), SPLIT if len(parts) > 1 else flags[i], np.int8))
     return np.concatenate(new), np.concatenate(new_flags)
