@@ -13,7 +13,8 @@ pixels tall):
    horizontal tail of a cast shadow off a person's feet;
 4. :func:`~mvtrack.detection.splitmerge.split_merge` with the tracker's predicted boxes and
    the size prior;
-5. boxes no object of the scene could have (:meth:`SizePrior.plausible`) are dropped.
+5. boxes no object of the scene could have (:meth:`SizePrior.plausible`) are dropped, and
+   partial bodies are completed to the prior's height (:func:`complete_bodies`).
 
 Boxes come back in the input frame's pixels; :attr:`SceneFrontEnd.flags` says for each
 whether it is plain, merged or split. :func:`detect_with_tracker` runs the front end and a
@@ -71,6 +72,9 @@ class SceneFrontEnd:
     split_params : dict or None
         Keywords of :func:`~mvtrack.detection.splitmerge.split_merge` (``inside``,
         ``cover``, ``wide``, ``max_parts``).
+    complete : float or None, default 0.85
+        Boxes less than this share of the expected height at their foot row are completed
+        upwards to it (:func:`complete_bodies`); None disables.
     verify : float or None, default None
         If set, a split box whose HOG people-detector margin
         (:func:`~mvtrack.detection.hog.hog_scores`, on the input frame) is below this value
@@ -103,6 +107,7 @@ class SceneFrontEnd:
         reject: bool = True,
         verify: float | None = None,
         split_params: dict[str, float] | None = None,
+        complete: float | None = 0.85,
     ) -> None:
         if work_pixels < 0:
             raise ValueError(f"work_pixels must be >= 0, got {work_pixels}")
@@ -122,6 +127,7 @@ class SceneFrontEnd:
         self.reject = bool(reject)
         self.verify = None if verify is None else float(verify)
         self.split_params = dict(split_params or {})
+        self.complete = None if complete is None else float(complete)
         self._hog: Any = None
         self.frames_seen = 0
         self.flags = np.zeros(0, np.int8)
@@ -231,6 +237,8 @@ class SceneFrontEnd:
         if self.reject and len(boxes):
             ok = self.prior.plausible(boxes)
             boxes, flags, area = boxes[ok], flags[ok], area[ok]
+        if self.complete is not None and self.prior.ready and len(boxes):
+            boxes = complete_bodies(boxes, self.prior, self.complete)
         out = self.to_input(boxes)
         if self.verify is not None and (flags == SPLIT).any():
             from mvtrack.detection.hog import _hog, hog_scores
@@ -263,6 +271,22 @@ class SceneFrontEnd:
             boxes[:, 0] = first - 0.5
             boxes[:, 2] = last - first + 1
         return boxes, area
+
+
+def complete_bodies(boxes: FloatArray, prior: SizePrior, share: float = 0.85) -> FloatArray:
+    """Boxes shorter than ``share`` of the expected height at their foot row, raised to it.
+
+    The foot row is kept: feet on the ground stand out from it, while a head or shoulders
+    against a wall of the same shade are the part that is lost (the usual partial body of
+    a fixed camera looking down at people in front of buildings).
+    """
+    b = np.array(boxes, np.float64, copy=True).reshape(-1, 4)
+    foot = b[:, 1] + b[:, 3]
+    h_exp = prior.expected(foot)[:, 1]
+    short = b[:, 3] < share * h_exp
+    b[short, 3] = h_exp[short]
+    b[short, 1] = foot[short] - h_exp[short]
+    return b
 
 
 def predicted_boxes(tf: TrackFrame) -> FloatArray:

@@ -43,6 +43,13 @@ SPLIT = 2  #: one part of a blob that held several objects
 
 FLAG_NAMES = {PLAIN: "plain", MERGED: "merged", SPLIT: "split"}
 
+#: column share below which a part's columns are trimmed (:func:`_extent`), as the scene
+#: front end trims its blobs
+TRIM = 0.2
+
+#: a second head must be at least this share of the tallest column's height (split_by_width)
+HEADS = 0.8
+
 
 def _overlap(a: FloatArray, b: FloatArray) -> FloatArray:
     """(M, N) intersection areas of boxes ``a`` (M, 4) and ``b`` (N, 4), tlwh."""
@@ -161,7 +168,15 @@ def _pixels(mask: NDArray[np.uint8], box: FloatArray) -> tuple[FloatArray, Float
     return cc.astype(np.float64) + c0, rr.astype(np.float64) + r0
 
 
-def _extent(cols: FloatArray, rows: FloatArray) -> FloatArray:
+def _extent(cols: FloatArray, rows: FloatArray, trim: float = TRIM) -> FloatArray:
+    """Box of the pixels, without the columns holding less than ``trim`` of the fullest
+    column's pixels (the low tail of a cast shadow)."""
+    if trim > 0 and cols.size:
+        c = (cols - cols.min()).astype(np.int64)
+        count = np.bincount(c)
+        full = count >= trim * count.max()
+        sel = full[c]
+        cols, rows = cols[sel], rows[sel]
     c0, r0 = cols.min(), rows.min()
     return np.array([c0 - 0.5, r0 - 0.5, cols.max() - c0 + 1, rows.max() - r0 + 1])
 
@@ -202,8 +217,9 @@ def split_by_width(
     The silhouette height of column ``c`` is the blob's bottom minus the top-most foreground
     row of the column. Near each equally spaced cut ``left + i w / k`` (within 30 % of a
     part's width) the lowest column is the candidate cut; it is kept only if it is at most
-    ``valley`` times the lower of the highest columns on either side (two heads with a dip
-    between them), so a single wide walker (arms and legs apart) is not cut.
+    ``valley`` times the lower of the highest columns on either side, and that lower one is
+    at least :data:`HEADS` of the blob's highest column (two heads of like height with a dip
+    between them), so a single wide walker (an arm or a bag out to one side) is not cut.
     """
     cols, rows = _pixels(mask, box)
     if cols.size == 0 or k < 2:
@@ -227,7 +243,8 @@ def split_by_width(
         cut = lo + int(np.argmin(height[lo : hi + 1]))
         left_peak = height[cuts[-1] : cut].max(initial=0.0)
         right_peak = height[cut + 1 : min(cut + 1 + int(step), width)].max(initial=0.0)
-        if height[cut] <= valley * min(left_peak, right_peak):
+        lower_peak = min(left_peak, right_peak)
+        if height[cut] <= valley * lower_peak and lower_peak >= HEADS * height.max():
             cuts.append(cut)
     cuts.append(width)
     if len(cuts) == 2:
@@ -265,6 +282,7 @@ def split_merge(
     wide: float = 1.8,
     max_parts: int = 6,
     valley: float = 0.85,
+    tall: float = 0.7,
 ) -> tuple[FloatArray, NDArray[np.int8]]:
     """Object boxes from the blobs of one frame (module docstring, steps 1–3).
 
@@ -287,6 +305,9 @@ def split_merge(
         ``max(wide, 1.8)`` times as wide are not used (a track on a blob of two).
     valley : float
         Step 3's dip of the silhouette (:func:`split_by_width`).
+    tall : float
+        Step 3 cuts only blobs at least this share of the expected height (a low, wide blob
+        is clutter, not people side by side).
     max_parts : int
         Most parts step 3 cuts a blob into.
 
@@ -321,9 +342,11 @@ def split_merge(
         k_of = np.bincount(home[claims], minlength=len(boxes))
     wide_k = np.zeros(len(boxes), np.int64)
     if size_prior is not None and size_prior.ready:
-        r = size_prior.ratio(boxes)[:, 0]
+        ratio = size_prior.ratio(boxes)
+        r = ratio[:, 0]
         k = np.clip(np.round(r), 2, max_parts)
-        wide_k = np.where(r >= wide, k, 0).astype(np.int64)
+        # only blobs as tall as an object: a low wide blob is clutter, not people side by side
+        wide_k = np.where((r >= wide) & (ratio[:, 1] >= tall), k, 0).astype(np.int64)
     todo = np.flatnonzero((k_of >= 2) | (wide_k >= 2))
     if todo.size == 0:
         return boxes, flags
