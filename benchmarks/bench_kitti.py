@@ -18,6 +18,7 @@ Usage::
     python benchmarks/bench_kitti.py                       # every design, Markdown to stdout
     python benchmarks/bench_kitti.py --designs scene-two-pass --json out.json
     python benchmarks/bench_kitti.py --speed               # front-end fps at 768×576 and 320×240
+    python benchmarks/bench_kitti.py --sensitivity         # one default changed at a time
     python benchmarks/bench_kitti.py --results-dir DIR     # also write each design's results
 """
 
@@ -192,6 +193,46 @@ DESIGNS: dict[str, tuple[str, Callable[..., list[Detections]]]] = {
 }
 
 
+#: one parameter of the default (scene-two-pass) changed at a time: (label, front-end kwargs)
+SENSITIVITY: list[tuple[str, dict[str, Any]]] = [
+    ("k_sigma 3.0 (3.5)", {"bg": {"k_sigma": 3.0}}),
+    ("k_sigma 4.0", {"bg": {"k_sigma": 4.0}}),
+    ("min_diff 12 (18)", {"bg": {"min_diff": 12.0}}),
+    ("min_diff 25", {"bg": {"min_diff": 25.0}}),
+    ("alpha 0.01 (0.02)", {"bg": {"alpha": 0.01}}),
+    ("alpha 0.04", {"bg": {"alpha": 0.04}}),
+    ("alpha_slow 0 (0.0005)", {"bg": {"alpha_slow": 0.0}}),
+    ("alpha_slow 0.002", {"bg": {"alpha_slow": 0.002}}),
+    ("guard on (off)", {"bg": {"guard": True}}),
+    ("relative_floor off (on)", {"bg": {"relative_floor": False}}),
+    ("trim 0.1 (0.2)", {"trim": 0.1}),
+    ("trim 0.3", {"trim": 0.3}),
+    ("close_frac 0.1 (0.15)", {"close_frac": 0.1}),
+    ("close_frac 0.2", {"close_frac": 0.2}),
+    ("wide 1.5 (1.8)", {"split_params": {"wide": 1.5}}),
+    ("wide 2.2", {"split_params": {"wide": 2.2}}),
+    ("complete 0.8 (0.85)", {"complete": 0.8}),
+    ("complete 0.95", {"complete": 0.95}),
+    ("complete off", {"complete": None}),
+    ("work_pixels 60k (110k)", {"work_pixels": 60_000}),
+    ("work_pixels 200k", {"work_pixels": 200_000}),
+]
+
+
+def sensitivity(frames: list[np.ndarray], gt: MotTable) -> list[dict]:
+    """The default design with one parameter changed at a time."""
+    rows = []
+    for label, kw in SENSITIVITY:
+        DESIGNS["_sens"] = (label, _scene("two-pass", **kw))
+        r = run_design("_sens", frames, gt, None)
+        r["design"] = label
+        rows.append(r)
+        print(f"| {label} | {r['MOTA']:.3f} | {r['IDF1']:.3f} | {r['IDSW']} | {r['FP']} | "
+              f"{r['FN']} | {r['det_recall']:.3f} | {r['det_precision']:.3f} |", flush=True)
+    del DESIGNS["_sens"]
+    return rows
+
+
 def run_design(name: str, frames: list[np.ndarray], gt: MotTable, out: Path | None) -> dict:
     size = (frames[0].shape[1], frames[0].shape[0])
     t0 = time.perf_counter()
@@ -260,7 +301,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", type=Path)
     ap.add_argument("--results-dir", type=Path)
     ap.add_argument("--speed", action="store_true", help="front-end speed instead of accuracy")
+    ap.add_argument("--sensitivity", action="store_true",
+                    help="the default design with one parameter changed at a time")
     args = ap.parse_args(argv)
+    if args.sensitivity:
+        frames = load_frames(args.seq)
+        print("| change | MOTA | IDF1 | IDsw | FP | FN | det R | det P |")
+        print("|---|---:|---:|---:|---:|---:|---:|---:|")
+        rows = sensitivity(frames, considered_gt(args.seq))
+        if args.json:
+            args.json.write_text(json.dumps(rows, indent=1))
+        return 0
     if args.speed:
         rows = speed()
         print("| size | front end | ms / frame | fps | decode ms / frame |")

@@ -138,19 +138,40 @@ def shadow_mask(
         Half-side of the correlation window.
     """
     lo, hi = ratio
-    li = frame.sum(axis=2) + 1.0
-    lm = mean.sum(axis=2) + 1.0
+    if out is None or out.shape != candidates.shape:
+        out = np.empty(candidates.shape, np.uint8)
+    out.fill(0)
+    x, y, w, h = cv2.boundingRect(candidates)  # the tests run on the candidates' rectangle
+    if w == 0 or h == 0:
+        return out
+    pad = radius if texture <= 1.0 else 0
+    x0, y0 = max(x - pad, 0), max(y - pad, 0)
+    x1, y1 = min(x + w + pad, candidates.shape[1]), min(y + h + pad, candidates.shape[0])
+    fr, mu = frame[y0:y1, x0:x1], mean[y0:y1, x0:x1]
+    li = channel_sum(fr) + 1.0
+    lm = channel_sum(mu) + 1.0
     r = li / lm
-    dchi = np.abs(frame / li[..., None] - mean / lm[..., None]).sum(axis=2)
+    dchi = channel_sum(cv2.absdiff(fr / li[..., None], mu / lm[..., None]))
     same = dchi < chroma
     if texture <= 1.0:
         rho, s_mu = _correlation(li, lm, radius)
         same |= (rho > texture) & (s_mu > 3.0 * min_texture)  # L sums 3 channels
-    shadow = (r >= lo) & (r <= hi) & same & (candidates > 0)
-    if out is None or out.shape != candidates.shape:
-        out = np.empty(candidates.shape, np.uint8)
-    np.multiply(shadow, np.uint8(255), out=out, casting="unsafe")
+    shadow = (r >= lo) & (r <= hi) & same & (candidates[y0:y1, x0:x1] > 0)
+    np.multiply(shadow, np.uint8(255), out=out[y0:y1, x0:x1], casting="unsafe")
     return out
+
+
+def channel_max(img: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Largest of the three channels per pixel (elementwise: a NumPy reduction over a last
+    axis of length 3 is several times slower)."""
+    b, g, r = cv2.split(img)
+    return cv2.max(cv2.max(b, g), r)
+
+
+def channel_sum(img: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Sum of the three channels per pixel."""
+    b, g, r = cv2.split(img)
+    return cv2.add(cv2.add(b, g), r)
 
 
 def _correlation(
@@ -352,17 +373,18 @@ class GaussianBackground:
             return None
         f = img.astype(np.float32)
         mean = self.mean
-        own = np.abs(f - mean).max(axis=2)  # distance to the pixel's own background
+        own = channel_max(cv2.absdiff(f, mean))  # distance to the pixel's own background
         if self._kernel is None:
             d = own
         else:  # eq. (1): distance to [min, max] of the neighbourhood, per channel
             lo = cv2.erode(mean, self._kernel)
             hi = cv2.dilate(mean, self._kernel)
-            d = np.maximum(np.maximum(lo - f, f - hi), 0.0).max(axis=2)
+            # max(lo − f, f − hi, 0) per channel, then the largest channel
+            d = channel_max(cv2.max(cv2.max(cv2.subtract(lo, f), cv2.subtract(f, hi)), 0.0))
         floor = self.min_diff
         if self.relative_floor:  # Weber: a darker surface shows the same object with less
             # contrast, so the floor follows its brightness (down to a third of it)
-            floor = self.min_diff * np.clip(mean.max(axis=2) / 128.0, 0.35, 1.0)
+            floor = self.min_diff * np.clip(channel_max(mean) / 128.0, 0.35, 1.0)
         thr = np.maximum(self.k_sigma * np.sqrt(self.var), floor)
         fg = d > thr
         mask = fg.astype(np.uint8) * np.uint8(255)
