@@ -1,0 +1,444 @@
+r"""A per-pixel Gaussian background without ghosts: selective update, shadows, jitter, bootstrap.
+
+The paper's disturbance map (:class:`~mvtrack.detection.background.DisturbanceMap`) learns its
+running average everywhere and thresholds with one global :math:`T`; walkers then leave trails
+that bridge neighbours, and a scene that starts with people in view keeps their ghosts. This
+model keeps, per pixel ``p`` of a BGR frame :math:`I`,
+
+.. math::
+
+    \mu_k(p) \in \mathbb{R}^3, \qquad \sigma^2_k(p) \in \mathbb{R},
+
+and calls ``p`` foreground when its colour distance to the background
+
+.. math::
+
+    d_k(p) = \max_c \,\min_{q \in N_j(p)} |I_{k,c}(p) - \mu_{k-1,c}(q)|  \qquad (1)
+
+exceeds :math:`\max(\lambda \sigma_{k-1}(p), d_{\min})`. :math:`N_j(p)` is the
+:math:`(2j+1)^2` neighbourhood of ``p`` (``jitter = j``): a pixel that matches the background
+one pixel away is background, so a camera that shakes by a pixel does not light up every
+edge (the neighbourhood model of Elgammal et al.); the minimum over the neighbourhood is
+evaluated as the distance to the interval between the neighbourhood's per-channel minimum and
+maximum (an erosion and a dilation of :math:`\mu`). Then the update is *selective*:
+
+.. math::
+
+    \mu_k = \mu_{k-1} + \alpha_p (I_k - \mu_{k-1}), \qquad
+    \sigma^2_k = \sigma^2_{k-1} + \alpha_p (d_k^2 - \sigma^2_{k-1}), \qquad
+    \alpha_p = \begin{cases} \alpha & p \text{ background} \\
+                             \alpha_{\text{slow}} & p \text{ foreground} \end{cases}  \qquad (2)
+
+(the variance only on background pixels, floored at :math:`\sigma_{\min}^2`). Foreground is
+not learnt at the background's rate, so a walker leaves no trail. The slow path absorbs an
+object that stays put, on purpose and whole: a pixel that has been foreground for
+``absorb_after`` frames in a row is set to the frame (600 frames: a minute at 10 fps), while
+:math:`\alpha_{\text{slow}} \ll \alpha` lets the model follow slow changes under it (and erodes
+the object from its faintest pixels); the stopped-vehicle logic holds such an object
+meanwhile.
+
+Shadows (Cucchiara et al.'s test, here in normalised chromaticity): a foreground pixel whose
+brightness ratio to the background lies in :math:`[r_{lo}, r_{hi}]` and whose chromaticity
+:math:`(b, g, r) / (b + g + r)` differs from the background's by less than
+:math:`\tau_c` (L1) is a shadow and is not foreground (:func:`shadow_mask`).
+
+Ghosts — a background that holds an object which has since left — appear as foreground
+blobs whose outline has strong edges in the background and none in the frame
+(:func:`ghost_blobs`); they are reset to the frame at once. A scene that starts with objects
+in view is bootstrapped with the per-pixel temporal median of frames spread over the start
+(online) or over the whole clip (offline, two passes; :func:`temporal_median`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+Image = NDArray[np.uint8]
+
+
+def temporal_median(frames: Iterable[Image], max_frames: int = 64) -> Image:
+    """Per-pixel temporal median of ``frames`` (a bootstrap background), ``uint8``.
+
+    Parameters
+    ----------
+    frames : iterable of (H, W, 3) or (H, W) uint8
+        The frames to take the median of (all the same shape). Pass frames spread over the
+        clip: a person who stands in less than half of them is gone from the median.
+    max_frames : int, default 64
+        At most this many frames are kept, evenly spaced over those given (memory: the
+        median needs all of them at once).
+
+    Raises
+    ------
+    ValueError
+        No frames, or frames of different shapes.
+    """
+    stack = [np.asarray(f) for f in frames]
+    if not stack:
+        raise ValueError("temporal_median: no frames")
+    shape = stack[0].shape
+    if any(f.shape != shape for f in stack):
+        raise ValueError("temporal_median: frames differ in shape")
+    if len(stack) > max_frames:
+        pick = np.linspace(0, len(stack) - 1, max_frames).round().astype(int)
+        stack = [stack[i] for i in pick]
+    return np.median(np.stack(stack), axis=0).round().astype(np.uint8)
+
+
+def shadow_mask(
+    frame: NDArray[np.float32],
+    mean: NDArray[np.float32],
+    candidates: Image,
+    ratio: tuple[float, float] = (0.1, 1.3),
+    chroma: float = 0.02,
+    texture: float = 0.8,
+    min_texture: float = 3.0,
+    radius: int = 2,
+    out: Image | None = None,
+) -> Image:
+    r"""Pixels of ``candidates`` that are shadows (or a change of exposure) on ``mean`` (0/255).
+
+    A cast shadow, or the camera's gain, scales the light a surface sends and keeps its
+    colour or its texture. With brightness :math:`L = b + g + r`, chromaticity
+    :math:`\chi = (b, g, r) / L` and :math:`\rho` the normalised cross-correlation of the grey
+    frame and background over a :math:`(2 r + 1)^2` window, a candidate is a shadow when
+
+    .. math::
+
+        r_{lo} \le L_I / L_\mu \le r_{hi} \;\wedge\;
+        \big(\|\chi_I - \chi_\mu\|_1 < \tau_c \;\vee\;
+        (\rho > \tau_\rho \wedge s_\mu > s_{\min})\big),
+
+    :math:`s_\mu` the background's local standard deviation (the texture test needs texture).
+    The chromaticity test is Cucchiara et al.'s; on sunlit scenes a shadow lit by the blue
+    sky changes colour and only the texture test finds it (on KITTI-17's bricks: 21 % of the
+    dark shadow pixels, against 11 % of the people's pixels lost; measured in
+    ``benchmarks/bench_kitti.py``'s research notes, docs/bench/kitti.md).
+
+    Parameters
+    ----------
+    frame, mean : (H, W, 3) float32
+        The frame and the background mean (BGR).
+    candidates : (H, W) uint8
+        Pixels to test (non-zero); others are never shadow.
+    ratio : (float, float)
+        :math:`[r_{lo}, r_{hi}]`, the brightness ratios a shadow or a change of gain may have.
+    chroma : float
+        :math:`\tau_c`, L1 distance of the chromaticities.
+    texture : float
+        :math:`\tau_\rho`; above 1 disables the texture test.
+    min_texture : float
+        :math:`s_{\min}`, grey levels.
+    radius : int
+        Half-side of the correlation window.
+    """
+    lo, hi = ratio
+    if out is None or out.shape != candidates.shape:
+        out = np.empty(candidates.shape, np.uint8)
+    out.fill(0)
+    x, y, w, h = cv2.boundingRect(candidates)  # the tests run on the candidates' rectangle
+    if w == 0 or h == 0:
+        return out
+    pad = radius if texture <= 1.0 else 0
+    x0, y0 = max(x - pad, 0), max(y - pad, 0)
+    x1, y1 = min(x + w + pad, candidates.shape[1]), min(y + h + pad, candidates.shape[0])
+    fr, mu = frame[y0:y1, x0:x1], mean[y0:y1, x0:x1]
+    li = channel_sum(fr) + 1.0
+    lm = channel_sum(mu) + 1.0
+    r = li / lm
+    dchi = channel_sum(cv2.absdiff(fr / li[..., None], mu / lm[..., None]))
+    same = dchi < chroma
+    if texture <= 1.0:
+        rho, s_mu = _correlation(li, lm, radius)
+        same |= (rho > texture) & (s_mu > 3.0 * min_texture)  # L sums 3 channels
+    shadow = (r >= lo) & (r <= hi) & same & (candidates[y0:y1, x0:x1] > 0)
+    np.multiply(shadow, np.uint8(255), out=out[y0:y1, x0:x1], casting="unsafe")
+    return out
+
+
+def channel_max(img: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Largest of the three channels per pixel (elementwise: a NumPy reduction over a last
+    axis of length 3 is several times slower)."""
+    b, g, r = cv2.split(img)
+    return cv2.max(cv2.max(b, g), r)
+
+
+def channel_sum(img: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Sum of the three channels per pixel."""
+    b, g, r = cv2.split(img)
+    return cv2.add(cv2.add(b, g), r)
+
+
+def _correlation(
+    a: NDArray[np.float32], b: NDArray[np.float32], radius: int
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """Windowed normalised cross-correlation of ``a`` and ``b``, and the local std of ``b``."""
+    k = (2 * radius + 1, 2 * radius + 1)
+    ea, eb = cv2.blur(a, k), cv2.blur(b, k)
+    cov = cv2.blur(a * b, k) - ea * eb
+    va = np.maximum(cv2.blur(a * a, k) - ea * ea, 0.0)
+    vb = np.maximum(cv2.blur(b * b, k) - eb * eb, 0.0)
+    return cov / np.sqrt(va * vb + 1e-3), np.sqrt(vb)
+
+
+def ghost_blobs(
+    labels: NDArray[np.int32],
+    n: int,
+    frame_grey: Image,
+    mean_grey: Image,
+    ratio: float = 2.0,
+) -> NDArray[np.bool_]:
+    """Which of the ``n - 1`` labelled blobs are ghosts (True), from the edges on their outline.
+
+    A real object's outline is an edge of the frame; a ghost's (the place an object of the
+    background has left) is an edge of the background and not of the frame. With ``E_I`` and
+    ``E_B`` the Sobel gradient magnitudes of the frame and the background, a blob is a ghost
+    when ``Σ E_B > ratio · Σ E_I`` over its outline (its pixels with a neighbour outside it).
+
+    Parameters
+    ----------
+    labels : (H, W) int32
+        Labels of ``cv2.connectedComponents`` (0 = background).
+    n : int
+        Number of labels, the background included.
+    frame_grey, mean_grey : (H, W) uint8
+        Grey frame and grey background.
+    ratio : float
+        Edge ratio above which a blob is a ghost.
+
+    Returns
+    -------
+    (n - 1,) bool
+        One flag per blob, labels 1 … n - 1.
+    """
+    if n <= 1:
+        return np.zeros(0, bool)
+    inside = (labels > 0).astype(np.uint8)
+    outline = inside - cv2.erode(inside, None)
+    lab = labels[outline > 0]
+    ei = _edges(frame_grey)[outline > 0]
+    eb = _edges(mean_grey)[outline > 0]
+    si = np.bincount(lab, ei, minlength=n)[1:]
+    sb = np.bincount(lab, eb, minlength=n)[1:]
+    return sb > ratio * si
+
+
+def _edges(grey: Image) -> NDArray[np.float32]:
+    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3)
+    return cv2.magnitude(gx, gy)
+
+
+class GaussianBackground:
+    """Per-pixel mean and variance with a threshold in standard deviations (module docstring).
+
+    Parameters
+    ----------
+    alpha : float, default 0.02
+        Learning rate of background pixels, eq. (2) (a memory of about 50 frames).
+    alpha_slow : float, default 0.0005
+        Learning rate of foreground pixels, eq. (2). It erodes a parked object from its
+        faintest pixels inward (on KITTI-17 half of a parked person's pixels are gone after
+        about 30 s at 10 fps) and absorbs clutter that changed for good; 0 keeps an object
+        whole until ``absorb_after``.
+    absorb_after : int, default 600
+        Consecutive foreground frames after which a pixel is absorbed (set to the frame): the
+        slow path that takes a parked object into the background after a minute at 10 fps,
+        not within seconds; 0 never.
+    guard : bool, default False
+        Learn at the slow rate also the pixels next to the foreground that differ from their
+        own background but passed the neighbourhood test of eq. (1), so that an object does
+        not erode from its outline inward while it waits to be absorbed (on by default it
+        cost KITTI-17 MOTA 0.19 → 0.14, docs/bench/kitti.md).
+    k_sigma : float, default 3.5
+        :math:`\\lambda`, the threshold in standard deviations.
+    min_diff : float, default 18
+        :math:`d_{\\min}`, the smallest colour difference (grey levels, largest channel) that
+        is foreground, whatever the variance (compression noise, flat regions).
+    relative_floor : bool, default True
+        Scale :math:`d_{\\min}` with the background's brightness,
+        ``min_diff · clip(max_c μ_c / 128, 0.35, 1)``: in the shade an object shows less
+        contrast (Weber's law).
+    init_sigma : float, default 6
+        Standard deviation of a freshly initialised background.
+    min_sigma : float, default 2
+        Floor of :math:`\\sigma`.
+    jitter : int, default 1
+        :math:`j` of eq. (1); 0 compares each pixel with its own background only.
+    shadows : bool, default True
+        Remove shadow pixels (:func:`shadow_mask`) from the foreground.
+    shadow_ratio, shadow_chroma, shadow_texture
+        ``ratio``, ``chroma`` and ``texture`` of :func:`shadow_mask`.
+    ghost_every : int, default 10
+        Test the foreground blobs for ghosts (:func:`ghost_blobs`) every this many frames
+        (0 never); a ghost's pixels are reset to the frame.
+
+    Attributes
+    ----------
+    mean : (H, W, 3) float32 or None
+        :math:`\\mu`; None until the first frame or :meth:`bootstrap`.
+    var : (H, W) float32 or None
+        :math:`\\sigma^2`.
+    shadow : (H, W) uint8 or None
+        The shadow pixels removed from the last mask (a reused buffer).
+    """
+
+    def __init__(
+        self,
+        alpha: float = 0.02,
+        alpha_slow: float = 0.0005,
+        absorb_after: int = 600,
+        guard: bool = False,
+        relative_floor: bool = True,
+        k_sigma: float = 3.5,
+        min_diff: float = 18.0,
+        init_sigma: float = 6.0,
+        min_sigma: float = 2.0,
+        jitter: int = 1,
+        shadows: bool = True,
+        shadow_ratio: tuple[float, float] = (0.1, 1.3),
+        shadow_chroma: float = 0.02,
+        shadow_texture: float = 0.8,
+        ghost_every: int = 10,
+    ) -> None:
+        for name, value in (("alpha", alpha), ("alpha_slow", alpha_slow)):
+            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+                raise ValueError(f"{name} must be in [0, 1], got {value}")
+        if not alpha_slow <= alpha:
+            raise ValueError(f"alpha_slow ({alpha_slow}) must not exceed alpha ({alpha})")
+        if not (math.isfinite(k_sigma) and k_sigma > 0):
+            raise ValueError(f"k_sigma must be a positive number, got {k_sigma}")
+        if not (math.isfinite(min_diff) and 0 <= min_diff < 255):
+            raise ValueError(f"min_diff must be in [0, 255) grey levels, got {min_diff}")
+        if not (0 < min_sigma <= init_sigma):
+            raise ValueError(
+                f"need 0 < min_sigma <= init_sigma, got {min_sigma} and {init_sigma}"
+            )
+        if absorb_after < 0:
+            raise ValueError(f"absorb_after must be >= 0 frames, got {absorb_after}")
+        if jitter < 0 or ghost_every < 0:
+            raise ValueError(f"jitter and ghost_every must be >= 0, got {jitter}, {ghost_every}")
+        lo, hi = shadow_ratio
+        if not (0 < lo < hi):
+            raise ValueError(f"shadow_ratio must be 0 < lo < hi, got {shadow_ratio}")
+        self.alpha = float(alpha)
+        self.alpha_slow = float(alpha_slow)
+        self.absorb_after = int(absorb_after)
+        self.guard = bool(guard)
+        self.relative_floor = bool(relative_floor)
+        self.k_sigma = float(k_sigma)
+        self.min_diff = float(min_diff)
+        self.init_sigma = float(init_sigma)
+        self.min_sigma = float(min_sigma)
+        self.jitter = int(jitter)
+        self.shadows = bool(shadows)
+        self.shadow_ratio = (float(lo), float(hi))
+        self.shadow_chroma = float(shadow_chroma)
+        self.shadow_texture = float(shadow_texture)
+        self.ghost_every = int(ghost_every)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the model."""
+        self.mean: NDArray[np.float32] | None = None
+        self.var: NDArray[np.float32] | None = None
+        self.shadow: Image | None = None
+        self.run: NDArray[np.uint16] | None = None  # consecutive foreground frames
+        self.frames_seen = 0
+        self._kernel = (
+            None if self.jitter == 0 else np.ones((2 * self.jitter + 1,) * 2, np.uint8)
+        )
+
+    def bootstrap(self, background: Image) -> None:
+        """Start from a known background (e.g. :func:`temporal_median` of the clip)."""
+        bg = _bgr(np.asarray(background))
+        self.mean = bg.astype(np.float32)
+        self.var = np.full(bg.shape[:2], self.init_sigma**2, np.float32)
+        self.run = np.zeros(bg.shape[:2], np.uint16)
+
+    def apply(self, frame: Image) -> Image | None:
+        """Foreground of ``frame`` (0/255 ``uint8``), then the update of eq. (2).
+
+        The first frame without a :meth:`bootstrap` initialises the model and returns None.
+        """
+        img = _bgr(frame)
+        self.frames_seen += 1
+        if self.mean is None or self.mean.shape != img.shape:
+            self.bootstrap(img)
+            return None
+        f = img.astype(np.float32)
+        mean = self.mean
+        own = channel_max(cv2.absdiff(f, mean))  # distance to the pixel's own background
+        if self._kernel is None:
+            d = own
+        else:  # eq. (1): distance to [min, max] of the neighbourhood, per channel
+            lo = cv2.erode(mean, self._kernel)
+            hi = cv2.dilate(mean, self._kernel)
+            # max(lo − f, f − hi, 0) per channel, then the largest channel
+            d = channel_max(cv2.max(cv2.max(cv2.subtract(lo, f), cv2.subtract(f, hi)), 0.0))
+        floor = self.min_diff
+        if self.relative_floor:  # Weber: a darker surface shows the same object with less
+            # contrast, so the floor follows its brightness (down to a third of it)
+            floor = self.min_diff * np.clip(channel_max(mean) / 128.0, 0.35, 1.0)
+        thr = np.maximum(self.k_sigma * np.sqrt(self.var), floor)
+        fg = d > thr
+        mask = fg.astype(np.uint8) * np.uint8(255)
+        if self.shadows:
+            self.shadow = shadow_mask(
+                f, mean, mask, self.shadow_ratio, self.shadow_chroma, self.shadow_texture,
+                out=self.shadow,
+            )
+            mask[self.shadow > 0] = 0
+        if self.ghost_every and self.frames_seen % self.ghost_every == 0:
+            self._remove_ghosts(img, mask, f)
+        # eq. (2): α_slow on the foreground and on the pixels next to it that the
+        # neighbourhood test let pass although they differ from their own background
+        # (learning those fast would let an object's colours spread into the background
+        # from its outline inward), α elsewhere (shadows included)
+        changed = mask > 0
+        if self._kernel is not None and self.guard:
+            near = cv2.dilate(mask, self._kernel) > 0
+            changed |= near & (own > thr)
+        if self.absorb_after:  # the slow path: changed for absorb_after frames is absorbed
+            np.add(self.run, 1, out=self.run, where=changed & (self.run < 65535))
+            self.run[~changed] = 0
+            done = self.run >= self.absorb_after
+            if done.any():
+                mean[done] = f[done]
+                self.run[done] = 0
+        a = np.where(changed, np.float32(self.alpha_slow), np.float32(self.alpha))
+        mean += a[..., None] * (f - mean)
+        # the variance on every pixel left out of the mask, so that leaves and water, which
+        # differ from their own mean often, widen their threshold
+        still = mask == 0
+        self.var[still] += self.alpha * (d[still] ** 2 - self.var[still])
+        np.maximum(self.var, self.min_sigma**2, out=self.var)
+        return mask
+
+    def _remove_ghosts(self, img: Image, mask: Image, f: NDArray[np.float32]) -> None:
+        n, labels = cv2.connectedComponents(mask, connectivity=8)
+        if n <= 1:
+            return
+        grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+        bg = cv2.cvtColor(self.mean.astype(np.uint8), cv2.COLOR_BGR2GRAY)
+        ghost = ghost_blobs(labels, n, grey, bg)
+        if not ghost.any():
+            return
+        sel = np.concatenate([[False], ghost])[labels]
+        self.mean[sel] = f[sel]
+        mask[sel] = 0
+
+
+def _bgr(frame: Image) -> Image:
+    if frame.dtype != np.uint8 or frame.ndim not in (2, 3):
+        raise ValueError(f"frame must be a uint8 image, got {frame.dtype} {frame.shape}")
+    if frame.ndim == 2:
+        return cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+    if frame.shape[2] == 1:
+        return cv2.cvtColor(frame[:, :, 0], cv2.COLOR_GRAY2BGR)
+    return frame
