@@ -50,7 +50,8 @@ def test_alpha_zero_equals_independent_filterpy_kalman_filters(model: str) -> No
     cells = [[_filterpy_bank(params, z[0, n, k], 4.0) for k in range(K)] for n in range(N)]
     edges = graph.edges
     rels = [
-        [_filterpy_bank(params, z[0, n, b] - z[0, n, a], 8.0, True) for a, b in edges] for n in range(N)
+        [_filterpy_bank(params, z[0, n, b] - z[0, n, a], 8.0, relation=True) for a, b in edges]
+        for n in range(N)
     ]
     alpha = np.zeros((N, K))
     for k in range(1, T):
