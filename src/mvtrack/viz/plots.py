@@ -126,14 +126,15 @@ def place_labels(
     texts: list[str],
     colors: list[object] | None = None,
     fontsize: float = 7.0,
-    max_radius: float = 40.0,
+    max_radius: float = 48.0,
 ) -> list:
     """Put one text per anchor (data coordinates) where it overlaps no other label.
 
-    Each label is tried at offsets of growing radius (points) in eight directions around its
-    anchor, and placed at the first position whose box lies inside the axes and clear of the
-    labels placed before it; a label that finds no place within ``max_radius`` points is left
-    out. Placed labels are joined to their anchor by a thin line when moved away from it.
+    Each label is tried at offsets of growing radius (points) in sixteen directions around its
+    anchor, the text extending away from the anchor, and placed at the first position whose
+    box lies inside the axes and clear of the labels placed before it; a label that finds no
+    place within ``max_radius`` points is left out. A label moved away from its anchor is joined
+    to it by a thin line.
 
     Returns
     -------
@@ -143,32 +144,48 @@ def place_labels(
     fig = ax.figure
     renderer = fig.canvas.get_renderer()
     inside = ax.get_window_extent(renderer)
-    taken: list = []
-    placed = []
-    directions = [(1, 1), (1, -1), (-1, 1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1)]
+    px = fig.dpi / 72.0
     colors = colors if colors is not None else ["black"] * len(texts)
-    for xy, text, color in zip(np.asarray(anchors, float), texts, colors, strict=True):
-        done = False
-        for radius in np.arange(4.0, max_radius + 1e-9, 4.0):
-            for dx, dy in directions:
-                off = (dx * radius, dy * radius)
-                ann = ax.annotate(
-                    text, xy, xytext=off, textcoords="offset points", fontsize=fontsize,
-                    color=color, ha="center", va="center", path_effects=halo(2.5),
-                    arrowprops={"arrowstyle": "-", "color": color, "lw": 0.6,
-                                "shrinkA": 0, "shrinkB": 0} if radius > 4.0 else None,
-                )
-                box = ann.get_window_extent(renderer)
-                ok = (box.x0 >= inside.x0 and box.x1 <= inside.x1 and box.y0 >= inside.y0
-                      and box.y1 <= inside.y1 and not any(box.overlaps(b) for b in taken))
-                if ok:
-                    taken.append(box)
-                    placed.append(ann)
-                    done = True
-                    break
-                ann.remove()
-            if done:
-                break
+    angles = np.arange(16) * (np.pi / 8) + np.pi / 4
+    radii = np.arange(3.0, max_radius + 1e-9, 3.0)
+    offs = (radii[:, None, None] * np.stack([np.cos(angles), np.sin(angles)], -1)[None]).reshape(
+        -1, 2)  # (candidates, 2) in points, nearest first
+    taken = np.zeros((0, 4))  # x0, y0, x1, y1 of placed labels, display pixels
+    placed = []
+    anchors = np.asarray(anchors, float).reshape(-1, 2)
+    for xy, text, color in zip(anchors, texts, colors, strict=True):
+        probe = ax.text(0, 0, text, fontsize=fontsize)
+        ext = probe.get_window_extent(renderer)
+        probe.remove()
+        w, h = ext.width + 2.0, ext.height + 2.0
+        ax_xy = ax.transData.transform(xy)
+        d = offs * px
+        # the text extends away from its anchor: left/right/centre by the offset's direction
+        sx = np.sign(np.round(offs[:, 0] / np.maximum(np.abs(offs).max(axis=1), 1e-9), 1))
+        sy = np.sign(np.round(offs[:, 1] / np.maximum(np.abs(offs).max(axis=1), 1e-9), 1))
+        x0 = ax_xy[0] + d[:, 0] - w * (1 - sx) / 2
+        y0 = ax_xy[1] + d[:, 1] - h * (1 - sy) / 2
+        box = np.stack([x0, y0, x0 + w, y0 + h], axis=1)
+        ok = ((box[:, 0] >= inside.x0) & (box[:, 2] <= inside.x1) & (box[:, 1] >= inside.y0)
+              & (box[:, 3] <= inside.y1))
+        if taken.size:
+            hit = ((box[:, None, 0] < taken[None, :, 2]) & (box[:, None, 2] > taken[None, :, 0])
+                   & (box[:, None, 1] < taken[None, :, 3]) & (box[:, None, 3] > taken[None, :, 1]))
+            ok &= ~hit.any(axis=1)
+        if not ok.any():
+            continue
+        i = int(np.argmax(ok))
+        ha = {1.0: "left", -1.0: "right", 0.0: "center"}[float(sx[i])]
+        va = {1.0: "bottom", -1.0: "top", 0.0: "center"}[float(sy[i])]
+        far = radii[i // len(angles)] > 3.0
+        ann = ax.annotate(
+            text, xy, xytext=tuple(offs[i]), textcoords="offset points", fontsize=fontsize,
+            color=color, ha=ha, va=va, path_effects=halo(2.5),
+            arrowprops={"arrowstyle": "-", "color": color, "lw": 0.6, "shrinkA": 0,
+                        "shrinkB": 0} if far else None,
+        )
+        taken = np.vstack([taken, box[i]])
+        placed.append(ann)
     return placed
 
 
@@ -269,8 +286,13 @@ def trajectory_figure(
                   loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
     fig.tight_layout()
     if labels and keep:
-        place_labels(ax, np.array([paths[i][-1] for i in keep]),
-                     [str(int(ids[i])) for i in keep], track_color)
+        ends = []
+        for i in keep:  # the last point of each path inside the image
+            p = paths[i]
+            seen = np.flatnonzero((p[:, 0] >= 0) & (p[:, 0] <= w) & (p[:, 1] >= 0)
+                                  & (p[:, 1] <= h))
+            ends.append(p[seen[-1]] if seen.size else np.clip(p[-1], 0, [w, h]))
+        place_labels(ax, np.array(ends), [str(int(ids[i])) for i in keep], track_color)
     return fig
 
 
