@@ -193,3 +193,57 @@ def test_table2_ratio_bars_are_the_measured_ratios(monkeypatch) -> None:
     assert h["ours, pure Python"] == pytest.approx([r["python_ratio"] for r in rows])
     assert h["ours, NumPy (one target)"] == pytest.approx([r["numpy_ratio"] for r in rows])
     assert [t.get_text() for t in ax.get_xticklabels()] == ["100", "200"]
+
+
+# ------------------------------------------------------------------------------- X6, X7
+
+
+def test_fig1_regions_fit_in_the_axes_and_titles_do_not_overlap() -> None:
+    from mvtrack.experiments import coupled_gate as x6
+
+    fig = x6.run().plots["regions"]
+    rendered(fig)
+    renderer = fig.canvas.get_renderer()
+    a, b = fig.axes[:2]
+    assert not a.title.get_window_extent(renderer).overlaps(b.title.get_window_extent(renderer))
+    for ax in (a, b):
+        x0, x1 = sorted(ax.get_xlim())
+        y0, y1 = sorted(ax.get_ylim())
+        n_closed = 0
+        for coll in ax.collections:  # every contour (iso-r² and gate) lies inside the view
+            for path in getattr(coll, "get_paths", lambda: [])():
+                v = path.vertices
+                if len(v) < 3:
+                    continue
+                assert v[:, 0].min() > x0 and v[:, 0].max() < x1
+                assert v[:, 1].min() > y0 and v[:, 1].max() < y1
+                n_closed += 1
+        assert n_closed >= 4  # two targets × (iso-r² through z, gate)
+        labels = list(legend_entries(ax))
+        assert any("(wins)" in t for t in labels)
+    assert "target 2: r² = 18 (wins)" in legend_entries(b)
+    assert "target 1: r² = 32 (wins)" in legend_entries(a)
+
+
+def test_crossing_bars_show_the_literal_eq10_as_a_failure() -> None:
+    from mvtrack.experiments import crossing as x7
+
+    report = x7.run(runs=6, seed=0)
+    fig = report.plots["swap_rates"]
+    head = fig.axes[0]
+    assert head.get_title().startswith("headline")
+    h = bar_heights(head)
+    names = [t.get_text() for t in head.get_xticklabels()]
+    lit = names.index("coupled-literal")
+    swap, fail = "track 1 ends on T2 (the paper's measure)", "any failure"
+    rows = report.figures["headline"]
+    assert h[swap] == pytest.approx([rows[d]["swap"]["rate"] for d in names])
+    assert h[fail] == pytest.approx([rows[d]["failure"]["rate"] for d in names])
+    assert h[swap][lit] == 0.0 and h[fail][lit] == 1.0  # no swap, because both tracks merge
+    # a Wilson interval on every bar, and the 0/6 bar's interval is not empty
+    bars = error_bars(head)
+    assert len(bars) == 2 * len(names)
+    lo, hi = binomial_ci(0, 6)
+    assert any(b[1] == pytest.approx(lo) and b[2] == pytest.approx(hi) for b in bars)
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert legend[1].startswith("any failure")
