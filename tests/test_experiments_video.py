@@ -66,20 +66,39 @@ def test_matching_leaves_far_rows_unpaired() -> None:
     assert breaks(np.arange(5), np.array([-1, 3, -1, 3, 4])) == [(4, 3, 4)]
 
 
-def test_synthetic_traffic_report(tmp_path) -> None:
-    from mvtrack.experiments import synthetic_traffic
+@pytest.mark.slow
+def test_synthetic_traffic_report(tmp_path, monkeypatch) -> None:
+    from mvtrack.experiments import synthetic_traffic as x4
 
-    rep = synthetic_traffic.run(runs=1, seed=0)
+    monkeypatch.setattr(x4, "Q_SWEEP", (0.01,))
+    rep = x4.run(runs=1, seed=0)
     f = rep.figures
-    assert set(f["tracks"]) == {"kalman-ca", "rls"}
     assert f["paper"]["tracks"] == {"kalman-ca": 10, "rls": 11}
-    # golden (measured 9 and 9: one track per vehicle, V9 never lost), with tolerance
+    assert f["setting"]["r"] == 1.0 and f["setting"]["kf_q"] == 0.1
+    # golden, SPEC X4 settings (B₀ = I₀): start-up tracks on the ghosts of V1–V8, then one
+    # track per vehicle; V9 is never lost, the KF comes within 1 px of the gate at bend B
+    assert f["tracks"] == {"kalman-ca": 23, "rls": 23}
+    assert f["startup_tracks"] == {"kalman-ca": 14, "rls": 13}
     for p in ("kalman-ca", "rls"):
-        assert 9 <= f["tracks"][p] <= 12, f["tracks"]
-        per_vehicle = f["tracks_per_vehicle"][p]
-        assert all(per_vehicle[v] == 1 for v in range(1, 9)), per_vehicle
-    # the cold start leaves ghost tracks behind the vehicles in view at frame 0
-    assert f["tracks_cold_start"]["kalman-ca"] > f["tracks"]["kalman-ca"]
+        assert f["v9_breaks"][p] == []
+        assert all(f["tracks_per_vehicle"][p][v] == 1 for v in (1, 2, 3, 4, 5, 6, 7, 9))
+    kf, rls = f["v9_prediction"]["kalman-ca"], f["v9_prediction"]["rls"]
+    assert 8.0 < kf["max_error_bend_B"] < 10.0 and rls["max_error_bend_B"] < 6.0
+    assert not kf["warmup_at_bend_A"] and not kf["warmup_at_bend_B"]
+    v = f["variants"]
+    assert v["kalman-ca, primed"]["tracks"] == 9 and v["rls, primed"]["tracks"] == 9
+    old = v["kalman-ca, R = 4, q = 0.05"]  # the previous headline: the KF breaks at bend B
+    assert [b["where"] for b in old["v9_breaks"]] == ["bend B"]
+    assert old["v9_breaks"][0]["prediction_error"] > 10.0
+    assert v["kalman-ca, q = 0.01"]["v9_breaks"]
+    assert "primed" in f["variant_reasons"]
+    # the figures: V9's error profile crosses the dashed 10 px gate only where a track broke
+    ax = rep.plots["v9_prediction"].axes[0]
+    assert any(tuple(line.get_ydata()) == (10.0, 10.0) for line in ax.lines)
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "track breaks" in legend and "KF, R = 4, q = 0.05 (variant)" in legend
+    traj = [t.get_text() for t in rep.plots["kalman-ca"].axes[0].get_legend().get_texts()]
+    assert traj == ["truth (dashed)", *(f"V{i}" for i in range(1, 10)), "start-up / spurious"]
     paths = write_report(rep, tmp_path)
     data = json.loads((tmp_path / "synthetic-traffic.json").read_text())
     assert data["tracks"] == f["tracks"]

@@ -90,9 +90,11 @@ PALETTE = (
     "#01665E",  # teal
     "#C51B7D",  # magenta
     "#6B6B00",  # olive
+    "#08306B",  # navy
+    "#A63603",  # dark orange
 )
 #: Colour of tracks and bars that stand for a failure or for nothing (spurious tracks).
-FAILURE_COLOR = "#7F7F7F"
+FAILURE_COLOR = "#595959"
 #: Colour of the ground truth drawn beside the estimates.
 TRUTH_COLOR = "#000000"
 
@@ -201,6 +203,7 @@ def trajectory_figure(
     group_colors: dict[str, object] | None = None,
     labels: bool = True,
     legend_title: str | None = None,
+    failure_group: str = "spurious",
 ):
     """Every track's path over the scene (image coordinates, y down), labelled with its ID.
 
@@ -225,12 +228,14 @@ def trajectory_figure(
         Group (legend entry) of each track ID, e.g. the object it follows; tracks missing from
         it are drawn in their ID's palette colour without a legend entry.
     group_colors : dict of str to colour, optional
-        Colour of each group (default: the palette in order of first appearance;
-        :data:`FAILURE_COLOR` for a group named ``"spurious"``).
+        Colour of each group (default: the palette in the groups' natural order, e.g. V1, V2,
+        …, V10; :data:`FAILURE_COLOR` and a dotted line for ``failure_group``).
     labels : bool
         Label each path's end with its track ID.
     legend_title : str, optional
         Title of the legend (shown when ``groups`` or ``truth`` is given).
+    failure_group : str
+        The group of tracks that follow nothing (drawn grey and dotted, listed last).
     """
     from matplotlib.lines import Line2D
 
@@ -253,28 +258,26 @@ def trajectory_figure(
     ids, paths, _ = rows.split()
     keep = [i for i, p in enumerate(paths) if len(p) >= min_length]
     colors: dict[str, object] = dict(group_colors or {})
+    used = sorted({groups[int(ids[i])] for i in keep if int(ids[i]) in groups}
+                  if groups is not None else set(), key=_natural)
+    used = [g for g in used if g != failure_group] + (
+        [failure_group] if failure_group in used else [])
+    for g in used:
+        if g not in colors:
+            colors[g] = FAILURE_COLOR if g == failure_group else PALETTE[
+                sum(1 for c in colors if c != failure_group) % len(PALETTE)]
     track_color = []
     for i in keep:
-        tid = int(ids[i])
-        if groups is not None and tid in groups:
-            g = groups[tid]
-            if g not in colors:
-                colors[g] = FAILURE_COLOR if g == "spurious" else PALETTE[
-                    sum(1 for c in colors if c != "spurious") % len(PALETTE)]
-            track_color.append(colors[g])
-        else:
-            track_color.append(PALETTE[tid % len(PALETTE)])
+        g = groups.get(int(ids[i])) if groups is not None else None
+        track_color.append(colors[g] if g is not None else PALETTE[int(ids[i]) % len(PALETTE)])
     for k, i in enumerate(keep):
         g = groups.get(int(ids[i])) if groups is not None else None
         ax.plot(paths[i][:, 0], paths[i][:, 1], color=track_color[k], lw=1.6, zorder=4,
-                ls=":" if g == "spurious" else "-", path_effects=halo(3.4))
+                ls=":" if g == failure_group else "-", path_effects=halo(3.4))
         ax.plot(*paths[i][0], "o", ms=3.2, color=track_color[k], zorder=5)
-    if groups is not None:
-        used = {groups[int(ids[i])] for i in keep if int(ids[i]) in groups}
-        for g, c in colors.items():
-            if g in used:
-                handles.append(Line2D([], [], color=c, lw=1.6, ls=":" if g == "spurious" else "-",
-                                      label=g))
+    for g in used:
+        handles.append(Line2D([], [], color=colors[g], lw=1.6,
+                              ls=":" if g == failure_group else "-", label=g))
     ax.set_xlim(0, w)
     ax.set_ylim(h, 0)
     ax.set_aspect("equal")
@@ -294,6 +297,13 @@ def trajectory_figure(
             ends.append(p[seen[-1]] if seen.size else np.clip(p[-1], 0, [w, h]))
         place_labels(ax, np.array(ends), [str(int(ids[i])) for i in keep], track_color)
     return fig
+
+
+def _natural(text: str) -> list:
+    """Sort key that orders embedded numbers by value (V2 before V10)."""
+    import re
+
+    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", text)]
 
 
 def grouped_bars(
