@@ -150,10 +150,11 @@ class Matching:
         best = int(counts.argmax())
         return int(ids[best]), float(counts[best] / n), int(ids.size)
 
-    def followers(self, obj_id: int) -> tuple[IntArray, IntArray, int]:
+    def followers(self, obj_id: int, frames: tuple[int, int] | None = None
+                  ) -> tuple[IntArray, IntArray, int]:
         """Tracks that follow ``obj_id``, non-exclusively: IDs, and in how many of the
-        object's visible frames each has a row within the pairing radius of it, and the
-        number of visible frames.
+        object's visible frames (within ``frames = (first, last)``, if given) each has a row
+        within the pairing radius of it, and the number of those frames.
 
         Unlike :meth:`coverage`, two tracks on one object (a vehicle whose blob split, both
         halves tracked) both follow it; the one-to-one pairing would hand its frames to one
@@ -161,7 +162,10 @@ class Matching:
         """
         if self.gt_xy is None or self.row_xy is None or self.gt_radius is None:
             raise ValueError("this Matching carries no positions (built without them)")
-        sel = np.flatnonzero(self.gt_id == obj_id)
+        mask = self.gt_id == obj_id
+        if frames is not None:
+            mask &= (self.gt_frame >= frames[0]) & (self.gt_frame <= frames[1])
+        sel = np.flatnonzero(mask)
         if sel.size == 0:
             return np.zeros(0, np.int64), np.zeros(0, np.int64), 0
         order = np.argsort(self.row_frame, kind="stable")
@@ -179,10 +183,12 @@ class Matching:
             np.zeros(0, np.int64), np.zeros(0, np.int64))
         return ids.astype(np.int64), counts.astype(np.int64), int(sel.size)
 
-    def followed_share(self, obj_id: int) -> tuple[int, float]:
-        """The track that follows ``obj_id`` in most of its visible frames (non-exclusively,
-        :meth:`followers`) and the share of those frames; ``(-1, 0.0)`` if none."""
-        ids, counts, n = self.followers(obj_id)
+    def followed_share(self, obj_id: int, frames: tuple[int, int] | None = None
+                       ) -> tuple[int, float]:
+        """The track that follows ``obj_id`` in most of its visible frames (within
+        ``frames``; non-exclusively, :meth:`followers`) and the share of those frames;
+        ``(-1, 0.0)`` if none."""
+        ids, counts, n = self.followers(obj_id, frames)
         if ids.size == 0 or n == 0:
             return -1, 0.0
         best = int(counts.argmax())
