@@ -148,10 +148,37 @@ def test_intersection_report(monkeypatch) -> None:
 
 @pytest.mark.slow
 def test_splitting_group_report() -> None:
-    from mvtrack.experiments import splitting_group
+    from mvtrack.experiments import splitting_group as x8
 
-    f = splitting_group.run(runs=1, seed=0).figures
-    for key in ("p1_own_track", "latency_frames_median", "idsw", "tracks"):
-        assert set(f[key]) == {"uncoupled", "coupled", "mahalanobis", "default"}
-    assert f["p1_own_track"]["coupled"] in (0, 1)
-    assert 10 <= f["tracks"]["coupled"] <= 30  # 14 targets
+    rep = x8.run(runs=1, seed=0)
+    f = rep.figures
+    assert f["runs"] == 1 and f["setting"]["blobs"] == {"close_size": 0, "min_area": 20.0}
+    for d in x8.DISTANCES:
+        s = f[d]
+        assert set(s["continues_on"]) == set(x8.OUTCOMES)
+        assert sum(r["k"] for r in s["continues_on"].values()) == 1  # one outcome per seed
+        # golden, seed 0: the group's track lives through the split and goes with P2/P3;
+        # P1 gets his own new track at once, whatever the distance
+        assert s["continues_on"]["ends"]["k"] == 0 and s["continues_on"]["P1"]["k"] == 0
+        assert s["p1_own_track"]["k"] == 1 and s["latency_frames"]["max"] <= 2
+        lo, hi = s["p1_own_track"]["ci95"]
+        assert 0.0 < lo < 1.0 == hi
+        iso = s["at_isolation_median"]
+        assert iso["p1_distance"] > 10.0 > iso["p2_p3_distance"]
+    for run_ in f["per_run"]["coupled"]:
+        assert run_["p1"]["group_track"] > 0 and run_["p1"]["first_isolated"] >= 60
+    assert set(f["variants"]) == {"default", *(f"{d}, {x8.NO_DEPTH}" for d in x8.DISTANCES)}
+    assert x8.NO_DEPTH in f["variant_reasons"]
+    # the outcome bars are the rates, each with its Wilson interval
+    ax = rep.plots["outcomes"].axes[0]
+    h = {c.get_label(): [p.get_height() for p in c.patches] for c in ax.containers
+         if hasattr(c, "patches") and not c.get_label().startswith("_")}
+    assert h[x8.LABELS["coupled"]] == pytest.approx(
+        [f["coupled"]["continues_on"][k]["rate"] for k in x8.OUTCOMES])
+    segs = [seg for coll in ax.collections for seg in coll.get_segments()]
+    assert len(segs) >= 3 * len(x8.OUTCOMES)
+    # the close-up shows the truth of P1–P3 beside the tracks
+    split = rep.plots["split"].axes[0]
+    labels = split.get_legend_handles_labels()[1]
+    assert "truth P1–P3" in labels and "the group's track" in labels and "P1's track" in labels
+    assert "does not help" in rep.notes or "helps here" in rep.notes

@@ -97,6 +97,9 @@ class Matching:
         Centre of each visible ground-truth row and the pairing radius around it.
     row_xy : (R, 2)
         Output position of each row.
+    row_near : (R,) int64
+        The object nearest each row within its pairing radius, whatever other rows are
+        paired with (0: none): the object the row *follows*.
     """
 
     gt_frame: IntArray
@@ -109,6 +112,7 @@ class Matching:
     gt_xy: FloatArray | None = None
     gt_radius: FloatArray | None = None
     row_xy: FloatArray | None = None
+    row_near: IntArray | None = None
 
     def associations(self) -> tuple[IntArray, IntArray]:
         """Track IDs and the number of detections each was associated with."""
@@ -149,6 +153,18 @@ class Matching:
         ids, counts = np.unique(held, return_counts=True)
         best = int(counts.argmax())
         return int(ids[best]), float(counts[best] / n), int(ids.size)
+
+    def follows(self, min_rows: int = 1) -> tuple[IntArray, IntArray]:
+        """Per track with ≥ ``min_rows`` rows: the object it follows in most of its rows
+        (non-exclusively, :attr:`row_near`; 0 when that is none)."""
+        if self.row_near is None:
+            raise ValueError("this Matching carries no positions (built without them)")
+        ids, inv, counts = np.unique(self.row_track, return_inverse=True, return_counts=True)
+        n_obj = int(max(self.row_near.max(initial=0), self.gt_id.max(initial=0))) + 1
+        table = np.zeros((ids.size, n_obj), np.int64)
+        np.add.at(table, (inv, self.row_near), 1)
+        keep = counts >= min_rows
+        return ids[keep].astype(np.int64), table[keep].argmax(axis=1).astype(np.int64)
 
     def followers(self, obj_id: int, frames: tuple[int, int] | None = None
                   ) -> tuple[IntArray, IntArray, int]:
@@ -214,6 +230,7 @@ def match_to_truth(
     g_frame, g_id, g_xy, g_wh = scene.frame[vis], scene.id[vis], scene.xy[vis], scene.wh[vis]
     g_track = np.full(g_frame.size, -1, np.int64)
     r_gt = np.zeros(r_frame.size, np.int64)
+    r_near = np.zeros(r_frame.size, np.int64)
     n = int(max(scene.n_frames, r_frame.max(initial=-1) + 1))
     g_start = np.searchsorted(g_frame, np.arange(n + 1))
     order = np.argsort(r_frame, kind="stable")
@@ -228,13 +245,16 @@ def match_to_truth(
         ok = d <= thr[gs][:, None]
         if not ok.any():
             continue
+        nearest = np.where(ok, d, np.inf).argmin(axis=0)  # per row, the nearest object
+        r_near[rs] = np.where(ok.any(axis=0), g_id[gs.start + nearest], 0)
         cost = np.where(ok, d, 1e6)
         gi, rj = linear_sum_assignment(cost)
         good = ok[gi, rj]
         gi, rj = gi[good], rj[good]
         g_track[gs.start + gi] = r_id[rs[rj]]
         r_gt[rs[rj]] = g_id[gs.start + gi]
-    return Matching(g_frame, g_id, g_track, r_frame, r_id, r_gt, r_assoc, g_xy, thr, r_xy)
+    return Matching(g_frame, g_id, g_track, r_frame, r_id, r_gt, r_assoc, g_xy, thr, r_xy,
+                    r_near)
 
 
 def breaks(frames: IntArray, tracks: IntArray) -> list[tuple[int, int, int]]:
@@ -340,9 +360,9 @@ def trajectory_plot(
     """The run's trajectories over the empty scene, coloured by what each track follows.
 
     Each track (output in at least ``min_length`` frames) is put in the group of the object
-    it is paired with in most of its rows (``group_of(obj_id)``, default the object's
-    category) or in ``spurious`` when that is none; the true paths of the objects are drawn
-    dashed beside them.
+    it follows in most of its rows (within the pairing radius, :meth:`Matching.follows`;
+    ``group_of(obj_id)``, default the object's category) or in ``spurious`` when that is
+    none; the true paths of the objects are drawn dashed beside them.
     """
     from mvtrack.sim.render import render_background
     from mvtrack.viz.plots import TrackRows, trajectory_figure
@@ -351,7 +371,7 @@ def trajectory_plot(
     bg = render_background(run.scene, 0)
     scene = run.scene
     name = group_of or (lambda v: str(scene.category[v - 1]))
-    ids, obj, _ = run.match.majority(1)
+    ids, obj = run.match.follows()
     groups = {int(t): (name(int(o)) if o > 0 else spurious) for t, o in zip(ids, obj,
                                                                           strict=True)}
     paths = {}

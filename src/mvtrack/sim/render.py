@@ -301,8 +301,9 @@ def render_frames(
     for occ in scene.meta.get("occluders", []):
         lo = (np.asarray(occ["xy"], float) - np.asarray(occ["wh"], float) / 2) * scale
         hi = (np.asarray(occ["xy"], float) + np.asarray(occ["wh"], float) / 2) * scale
+        bottom = hi[1:] if occ.get("depth", True) else np.array([np.inf])
         occ_boxes.append((np.floor(lo).astype(int) - 1, np.ceil(hi).astype(int) + 1,
-                          occ.get("hides") == "lower half", hi[1:]))
+                          occ.get("hides") == "lower half", bottom))
     for f in range(n_frames):
         dx, dy = float(shifts[f, 0]), float(shifts[f, 1])
         if m:

@@ -192,7 +192,8 @@ def _visibility(
     An occluder hides the part of a box inside its rectangle; one with ``hides == "lower
     half"`` (a parked car that people walk behind: it covers their legs, not their heads)
     hides only the part of the box's lower half inside it, and only of boxes behind it (their
-    lower edge above the occluder's); a box whose lower edge is below it is in front.
+    lower edge above the occluder's); a box whose lower edge is below it is in front. With
+    ``depth`` False every box counts as behind it.
     """
     lo, hi = xy - wh / 2, xy + wh / 2
     area = np.maximum(wh.prod(axis=-1), 1e-12)
@@ -205,7 +206,8 @@ def _visibility(
         o_hi = o_lo + np.asarray(occ["wh"], float)
         top = lo.copy()
         if occ.get("hides") == "lower half":  # the lower half of a box behind the occluder
-            top[..., 1] = np.where(hi[..., 1] <= o_hi[1], xy[..., 1], hi[..., 1])
+            behind = hi[..., 1] <= o_hi[1] if occ.get("depth", True) else True
+            top[..., 1] = np.where(behind, xy[..., 1], hi[..., 1])
         a = np.maximum(top, np.maximum(o_lo, 0.0))
         b = np.minimum(hi, np.minimum(o_hi, img))
         hidden += np.clip(b - a, 0.0, None).prod(axis=-1)
@@ -677,7 +679,7 @@ def x5_intersection(seed: int | np.random.Generator = 0) -> Scene:
 
 
 # ---------------------------------------------------------------------- X8
-def x8_splitting_group(seed: int | np.random.Generator = 0) -> Scene:
+def x8_splitting_group(seed: int | np.random.Generator = 0, car_depth: bool = True) -> Scene:
     """Paper 2's group of three people splitting behind a car, plus 11 others (SPEC X8).
 
     320×240, 15 fps, 240 frames. A static white car 44×22 px centred at (96, 64) is an
@@ -686,7 +688,9 @@ def x8_splitting_group(seed: int | np.random.Generator = 0) -> Scene:
     and not their heads, SPEC X8 as revised), so the group stays visible while it splits. P1–P3
     (ids 1–3, category ``group``) start at (18, 12) with v = (1.2, 0.8), side by side ±9 px
     across the direction of motion (P1 on the upper-right side), 8×16 px, so their blobs
-    merge. At frame 60 (split point (90, 60), over the car) they change velocity: P1
+    merge. With ``car_depth`` False the car hides the lower half of everyone over it, also of
+    people whose feet are already below its lower edge (a variant of the [R] geometry). At
+    frame 60 (split point (90, 60), over the car) they change velocity: P1
     (1.44, 0.46), P2 (0.25, 1.4), P3 (−0.15, 1.4). Their colours differ from the paving by
     ≥ 40 grey levels of luma, so each person's visible upper half is one blob. Eleven others
     on straight lines, kept ≥ 30 px (centre distance) from every group member, ≥ 24 px from
@@ -708,7 +712,7 @@ def x8_splitting_group(seed: int | np.random.Generator = 0) -> Scene:
     # a light cabin: the people's upper halves (luma 64–73, skin 169) stand out against every
     # part of the car they pass in front of
     occ = {"xy": (96.0, 64.0), "wh": (44.0, 22.0), "color": (245, 245, 245),
-           "color2": (205, 205, 200), "hides": "lower half"}
+           "color2": (205, 205, 200), "hides": "lower half", "depth": bool(car_depth)}
     occ_lo = np.array(occ["xy"]) - np.array(occ["wh"]) / 2 - 4.0
     occ_hi = np.array(occ["xy"]) + np.array(occ["wh"]) / 2 + 4.0
 
