@@ -225,9 +225,10 @@ def test_fig1_regions_fit_in_the_axes_and_titles_do_not_overlap() -> None:
     assert "target 1: r² = 32 (wins)" in legend_entries(a)
 
 
-def test_crossing_bars_show_the_literal_eq10_as_a_failure() -> None:
+def test_crossing_bars_show_the_literal_eq10_as_a_failure(monkeypatch) -> None:
     from mvtrack.experiments import crossing as x7
 
+    monkeypatch.setattr(x7, "RHO_SWEEP", (1.0,))
     report = x7.run(runs=6, seed=0)
     fig = report.plots["swap_rates"]
     head = fig.axes[0]
