@@ -347,8 +347,8 @@ paper 1's "both track the straight and the turning vehicles". The two tones of a
 the jitter-flickering edges of a standing one become separate blobs, each unused blob starts a
 track, and under the non-exclusive nearest rule the extra track then rides on the same
 vehicle: in {kf['twin_frames_share']:.0%} (KF) and {rl['twin_frames_share']:.0%} (RLS) of the
-moving vehicles' frames two tracks are on one vehicle, usually on the same detection. This is
-paper 1's "segmentation splits vehicles by colour", much amplified. A one-to-one pairing of
+moving vehicles' frames two tracks are on one vehicle. This is paper 1's "segmentation splits
+vehicles by colour", much amplified. A one-to-one pairing of
 tracks to vehicles (the previous measure, a variant here) counts {fmt_rate(kf['paired_moving'])}
 (KF) against {fmt_rate(rl['paired_moving'])} (RLS), and the difference is not tracking quality:
 RLS reports the measurement itself as its position, so two RLS tracks on one detection sit
