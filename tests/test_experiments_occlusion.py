@@ -90,6 +90,23 @@ def test_occlusion_experiment_report(tmp_path, monkeypatch) -> None:
     errs = [sweep[k]["skf_max_err"] for k in ("1", "0.01", "0.001", "0")]
     assert errs == sorted(errs, reverse=True)  # stiffer relations, smaller error, monotone
     assert sweep["0.01"]["skf_max_err"] == pytest.approx(fig["skf_max_err"])
+    # the figures: the truth beside the estimates in Fig. 11, failures in grey in the sweep
+    legs = report.plots["fig11_legs"].axes[0]
+    truth = [line for line in legs.lines if line.get_label() == "truth: leg centre"]
+    assert truth and len(truth[0].get_ydata()) == 50
+    labels = [line.get_label() for line in legs.lines]
+    assert any("Q_r = Q_c" in lab for lab in labels) and "independent KF prediction" in labels
+    bars = [p for c in report.plots["q_rel_sweep"].axes[0].containers
+            if hasattr(c, "patches") for p in c.patches]
+    assert len(bars) == len(sweep)
+    from matplotlib.colors import to_hex
+
+    from mvtrack.viz.plots import FAILURE_COLOR
+
+    for p, key in zip(bars, sweep, strict=True):
+        failed = not sweep[key]["target_met"]
+        assert p.get_height() == pytest.approx(sweep[key]["skf_max_err"])
+        assert (to_hex(p.get_facecolor()) == FAILURE_COLOR.lower()) == failed
     md = report.markdown()
     assert "Variants:" in md and "*Q_r = Q_c*: the previous default" in md
     paths = write_report(report, tmp_path)

@@ -117,4 +117,16 @@ def test_rls_weights_average_the_last_three_samples_and_oscillate_more_than_the_
     rates = [fig["lambda_sweep"][str(lam)]["oscillation"]["sign_changes"]["pre"]
              for lam in x1.LAMBDAS]
     assert rates == sorted(rates, reverse=True)  # shorter memory, more oscillation
-    assert "oscillation" in report.plots
+    # the oscillation figure shows these numbers, each bar with its 95 % interval
+    ax = report.plots["oscillation"].axes[0]
+    bars = {c.get_label(): [p.get_height() for p in c.patches] for c in ax.containers
+            if hasattr(c, "patches") and not c.get_label().startswith("_")}
+    before = bars["30 samples before each change"]
+    assert before[1:] == pytest.approx(rates)
+    assert before[0] == pytest.approx(fig["kf_oscillation"]["sign_changes"]["pre"])
+    segs = [seg for coll in ax.collections for seg in coll.get_segments()]
+    assert len(segs) >= 2 * len(before)
+    # Fig. 8 draws the R / M floor that any 3-tap average passes
+    fig8 = report.plots["fig8_ensemble_mse"].axes[0]
+    floors = [line for line in fig8.lines if line.get_label().startswith("R / M")]
+    assert floors and floors[0].get_ydata()[0] == pytest.approx(5.0 / 3)
