@@ -77,3 +77,56 @@ def test_same_seed_same_result_and_runs_validated() -> None:
     assert a["kf_mse_windows"] == b["kf_mse_windows"]
     with pytest.raises(ValueError, match="runs"):
         x1.run(runs=0)
+
+
+def test_oscillation_measure_detects_alternation_only_after_the_changes() -> None:
+    rng = np.random.default_rng(0)
+    runs, K = 200, 360
+    smooth = np.cumsum(rng.normal(0, 1, (runs, K)), axis=1)  # random walk: few sign changes
+    o = x1.oscillation(smooth)
+    assert o["sign_changes"]["pre"] < 0.2 and not o["more_after_changes"]
+    white = rng.normal(0, 1, (runs, K))
+    o = x1.oscillation(white)
+    assert o["sign_changes"]["pre"] == pytest.approx(0.5, abs=0.02)
+    assert o["hf_share"]["pre"] == pytest.approx(0.5, abs=0.05)
+    assert not o["more_after_changes"] and abs(o["sign_changes"]["z"]) < 4
+    ringing = smooth.copy()
+    for c in x1.CHANGES:  # a decaying alternation for 30 samples after each change
+        n = np.arange(30)
+        ringing[:, c : c + 30] = 50 * (-1.0) ** n * np.exp(-n / 15) + white[:, c : c + 30]
+    o = x1.oscillation(ringing)
+    assert o["more_after_changes"] and o["rings"]
+    assert o["sign_changes"]["post"] > 0.9 and o["sign_changes"]["z"] > 10
+    lo, hi = o["sign_changes"]["post_ci95"]
+    assert lo <= o["sign_changes"]["post"] <= hi and hi - lo < 0.02
+
+
+def test_rls_weights_average_the_last_three_samples_and_oscillate_more_than_the_kf() -> None:
+    report = x1.run(runs=30, seed=1)
+    fig = report.figures
+    sw = fig["lambda_sweep"]["0.98"]
+    w = np.array(sw["mean_weights_after_warmup"])
+    np.testing.assert_allclose(w, 1 / 3, atol=0.06)  # a moving average, not (3, −3, 1)
+    assert w.sum() == pytest.approx(1.0, abs=0.03)
+    # the noise the taps pass is at least R / M (the minimum of R Σw² under Σw = 1)
+    assert 5.0 * sw["noise_gain_after_warmup"] >= fig["rls_noise_floor"] - 1e-9
+    assert fig["rls_mse_after_warmup"] > 2.5 * fig["kf_mse_after_warmup"]
+    assert fig["checks"]["rls_oscillates_more_than_kf"]
+    # the oscillation is there all the time, not brought on by the acceleration changes
+    assert not fig["checks"]["rls_oscillates_more_after_acceleration_changes"]
+    rates = [fig["lambda_sweep"][str(lam)]["oscillation"]["sign_changes"]["pre"]
+             for lam in x1.LAMBDAS]
+    assert rates == sorted(rates, reverse=True)  # shorter memory, more oscillation
+    # the oscillation figure shows these numbers, each bar with its 95 % interval
+    ax = report.plots["oscillation"].axes[0]
+    bars = {c.get_label(): [p.get_height() for p in c.patches] for c in ax.containers
+            if hasattr(c, "patches") and not c.get_label().startswith("_")}
+    before = bars["30 samples before each change"]
+    assert before[1:] == pytest.approx(rates)
+    assert before[0] == pytest.approx(fig["kf_oscillation"]["sign_changes"]["pre"])
+    segs = [seg for coll in ax.collections for seg in coll.get_segments()]
+    assert len(segs) >= 2 * len(before)
+    # Fig. 8 draws the R / M floor that any 3-tap average passes
+    fig8 = report.plots["fig8_ensemble_mse"].axes[0]
+    floors = [line for line in fig8.lines if line.get_label().startswith("R / M")]
+    assert floors and floors[0].get_ydata()[0] == pytest.approx(5.0 / 3)

@@ -182,10 +182,31 @@ def test_x8_group_geometry_and_split() -> None:
         f, q = xy[i]
         after = (f >= 60) & (f < 100)
         np.testing.assert_allclose(np.diff(q[after], axis=0), np.tile(v, (after.sum() - 1, 1)))
-    # The split point is hidden by the car: P2 is not visible at frame 60.
+    # The car hides at most the lower half of each person (SPEC X8 as revised): the group is
+    # visible in every frame, and exactly half hidden where a person stands behind the car.
+    group = np.isin(sc.id, [1, 2, 3])
+    assert np.all(sc.visibility[group & (sc.frame < 120)] >= S.VISIBLE_MIN)
     row = (sc.frame == 60) & (sc.id == 2)
-    assert sc.visibility[row][0] < S.VISIBLE_MIN
-    assert sc.meta["occluders"][0]["wh"] == (44.0, 22.0)
+    assert sc.visibility[row][0] == pytest.approx(0.5)
+    early = group & (sc.frame == 20)
+    np.testing.assert_allclose(sc.visibility[early], 1.0)
+    occ = sc.meta["occluders"][0]
+    assert occ["wh"] == (44.0, 22.0) and occ["xy"] == (96.0, 64.0)
+    assert occ["hides"] == "lower half"
+
+
+def test_lower_half_occluder_hides_only_the_lower_half_of_boxes_behind_it() -> None:
+    occ = [{"xy": (50.0, 50.0), "wh": (40.0, 20.0), "hides": "lower half"}]  # y in [40, 60]
+    full = [{"xy": (50.0, 50.0), "wh": (40.0, 20.0)}]
+    xy = np.array([[50.0, 44.0], [50.0, 40.0], [50.0, 55.0], [200.0, 50.0]])
+    wh = np.tile([8.0, 16.0], (4, 1))
+    _, vis = S._visibility(xy, wh, (320, 240), occ)
+    # behind the car (feet at 52, 48): the part of the lower half inside it; in front (feet at
+    # 63, below the car's edge at 60): nothing; far away: nothing
+    np.testing.assert_allclose(vis, [0.5, 1.0 - 8 * 8 / 128, 1.0, 1.0])
+    _, vis_full = S._visibility(xy, wh, (320, 240), full)
+    np.testing.assert_allclose(vis_full, [1 - 8 * 12 / 128, 1 - 8 * 8 / 128, 1 - 8 * 13 / 128,
+                                          1.0])
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

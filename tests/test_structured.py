@@ -25,9 +25,11 @@ from mvtrack.filters.structured import (
 FIG2_EDGES = [(0, 1), (1, 2), (0, 2), (2, 3)]  # relations 12, 23, 13, 34 of Fig. 2
 
 
-def _filterpy_bank(params: SKFParams, z0: np.ndarray, r: float) -> KalmanFilter:
+def _filterpy_bank(
+    params: SKFParams, z0: np.ndarray, r: float, relation: bool = False
+) -> KalmanFilter:
     kf = KalmanFilter(dim_x=params.n, dim_z=2)
-    kf.F, kf.H, kf.Q = params.F, params.H, params.Q
+    kf.F, kf.H, kf.Q = params.F, params.H, params.Q_rel if relation else params.Q
     kf.R = r * np.eye(2)
     kf.P = params.P0(r)
     kf.x = np.zeros((params.n, 1))
@@ -48,7 +50,8 @@ def test_alpha_zero_equals_independent_filterpy_kalman_filters(model: str) -> No
     cells = [[_filterpy_bank(params, z[0, n, k], 4.0) for k in range(K)] for n in range(N)]
     edges = graph.edges
     rels = [
-        [_filterpy_bank(params, z[0, n, b] - z[0, n, a], 8.0) for a, b in edges] for n in range(N)
+        [_filterpy_bank(params, z[0, n, b] - z[0, n, a], 8.0, relation=True) for a, b in edges]
+        for n in range(N)
     ]
     alpha = np.zeros((N, K))
     for k in range(1, T):

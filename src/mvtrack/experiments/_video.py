@@ -11,6 +11,7 @@ its best single track.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -92,6 +93,13 @@ class Matching:
         Output rows with a public ID, and the object each is paired with (0: none).
     row_assoc : (R,) bool
         The row used a detection (``det_index ≥ 0``).
+    gt_xy, gt_radius : (G, 2), (G,)
+        Centre of each visible ground-truth row and the pairing radius around it.
+    row_xy : (R, 2)
+        Output position of each row.
+    row_near : (R,) int64
+        The object nearest each row within its pairing radius, whatever other rows are
+        paired with (0: none): the object the row *follows*.
     """
 
     gt_frame: IntArray
@@ -101,6 +109,10 @@ class Matching:
     row_track: IntArray
     row_gt: IntArray
     row_assoc: NDArray[np.bool_]
+    gt_xy: FloatArray | None = None
+    gt_radius: FloatArray | None = None
+    row_xy: FloatArray | None = None
+    row_near: IntArray | None = None
 
     def associations(self) -> tuple[IntArray, IntArray]:
         """Track IDs and the number of detections each was associated with."""
@@ -142,6 +154,62 @@ class Matching:
         best = int(counts.argmax())
         return int(ids[best]), float(counts[best] / n), int(ids.size)
 
+    def follows(self, min_rows: int = 1) -> tuple[IntArray, IntArray]:
+        """Per track with ≥ ``min_rows`` rows: the object it follows in most of its rows
+        (non-exclusively, :attr:`row_near`; 0 when that is none)."""
+        if self.row_near is None:
+            raise ValueError("this Matching carries no positions (built without them)")
+        ids, inv, counts = np.unique(self.row_track, return_inverse=True, return_counts=True)
+        n_obj = int(max(self.row_near.max(initial=0), self.gt_id.max(initial=0))) + 1
+        table = np.zeros((ids.size, n_obj), np.int64)
+        np.add.at(table, (inv, self.row_near), 1)
+        keep = counts >= min_rows
+        return ids[keep].astype(np.int64), table[keep].argmax(axis=1).astype(np.int64)
+
+    def followers(self, obj_id: int, frames: tuple[int, int] | None = None
+                  ) -> tuple[IntArray, IntArray, int]:
+        """Tracks that follow ``obj_id``, non-exclusively: IDs, and in how many of the
+        object's visible frames (within ``frames = (first, last)``, if given) each has a row
+        within the pairing radius of it, and the number of those frames.
+
+        Unlike :meth:`coverage`, two tracks on one object (a vehicle whose blob split, both
+        halves tracked) both follow it; the one-to-one pairing would hand its frames to one
+        or the other, whichever happened to be nearer in each frame.
+        """
+        if self.gt_xy is None or self.row_xy is None or self.gt_radius is None:
+            raise ValueError("this Matching carries no positions (built without them)")
+        mask = self.gt_id == obj_id
+        if frames is not None:
+            mask &= (self.gt_frame >= frames[0]) & (self.gt_frame <= frames[1])
+        sel = np.flatnonzero(mask)
+        if sel.size == 0:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64), 0
+        order = np.argsort(self.row_frame, kind="stable")
+        frames = self.row_frame[order]
+        lo = np.searchsorted(frames, self.gt_frame[sel], side="left")
+        hi = np.searchsorted(frames, self.gt_frame[sel], side="right")
+        take = np.concatenate([order[a:b] for a, b in zip(lo, hi, strict=True)]
+                              ) if sel.size else np.zeros(0, np.intp)
+        which = np.repeat(np.arange(sel.size), hi - lo)
+        d = np.linalg.norm(self.row_xy[take] - self.gt_xy[sel][which], axis=1)
+        near = d <= self.gt_radius[sel][which]
+        # one count per (track, frame) pair
+        pairs = np.unique(np.stack([self.row_track[take][near], which[near]], axis=1), axis=0)
+        ids, counts = np.unique(pairs[:, 0], return_counts=True) if pairs.size else (
+            np.zeros(0, np.int64), np.zeros(0, np.int64))
+        return ids.astype(np.int64), counts.astype(np.int64), int(sel.size)
+
+    def followed_share(self, obj_id: int, frames: tuple[int, int] | None = None
+                       ) -> tuple[int, float]:
+        """The track that follows ``obj_id`` in most of its visible frames (within
+        ``frames``; non-exclusively, :meth:`followers`) and the share of those frames;
+        ``(-1, 0.0)`` if none."""
+        ids, counts, n = self.followers(obj_id, frames)
+        if ids.size == 0 or n == 0:
+            return -1, 0.0
+        best = int(counts.argmax())
+        return int(ids[best]), float(counts[best] / n)
+
     def sequence(self, obj_id: int) -> tuple[IntArray, IntArray]:
         """Frames where ``obj_id`` is visible and the track paired with it (−1: none)."""
         sel = self.gt_id == obj_id
@@ -162,6 +230,7 @@ def match_to_truth(
     g_frame, g_id, g_xy, g_wh = scene.frame[vis], scene.id[vis], scene.xy[vis], scene.wh[vis]
     g_track = np.full(g_frame.size, -1, np.int64)
     r_gt = np.zeros(r_frame.size, np.int64)
+    r_near = np.zeros(r_frame.size, np.int64)
     n = int(max(scene.n_frames, r_frame.max(initial=-1) + 1))
     g_start = np.searchsorted(g_frame, np.arange(n + 1))
     order = np.argsort(r_frame, kind="stable")
@@ -176,13 +245,16 @@ def match_to_truth(
         ok = d <= thr[gs][:, None]
         if not ok.any():
             continue
+        nearest = np.where(ok, d, np.inf).argmin(axis=0)  # per row, the nearest object
+        r_near[rs] = np.where(ok.any(axis=0), g_id[gs.start + nearest], 0)
         cost = np.where(ok, d, 1e6)
         gi, rj = linear_sum_assignment(cost)
         good = ok[gi, rj]
         gi, rj = gi[good], rj[good]
         g_track[gs.start + gi] = r_id[rs[rj]]
         r_gt[rs[rj]] = g_id[gs.start + gi]
-    return Matching(g_frame, g_id, g_track, r_frame, r_id, r_gt, r_assoc)
+    return Matching(g_frame, g_id, g_track, r_frame, r_id, r_gt, r_assoc, g_xy, thr, r_xy,
+                    r_near)
 
 
 def breaks(frames: IntArray, tracks: IntArray) -> list[tuple[int, int, int]]:
@@ -194,6 +266,55 @@ def breaks(frames: IntArray, tracks: IntArray) -> list[tuple[int, int, int]]:
     f, t = frames[held], tracks[held]
     change = np.flatnonzero(t[1:] != t[:-1]) + 1
     return [(int(f[i]), int(t[i - 1]), int(t[i])) for i in change]
+
+
+def pipeline_blob_params(size: tuple[int, int]) -> dict[str, Any]:
+    """The blob stage ``mvtrack track`` uses for a video of ``size`` (a 7×7 closing and
+    area ≥ 40 px at 320×240), which the specification's experiments run as a variant."""
+    return dict(resolve_settings(RunSettings(), size).detector_params)
+
+
+def prediction_errors(run: SceneRun, obj_id: int, warmup_hits: int = 6) -> dict[str, Any]:
+    """How the track that holds ``obj_id`` predicted it, frame by frame.
+
+    For every visible frame f of the object after its first paired one, the track that was
+    paired with it at the last earlier frame (the track that should continue) is looked up at
+    f: its gate centre ``predicted_xy`` against the true centre gives the prediction error,
+    its associations before f tell whether it was still in paper 1's warm-up (fewer than
+    ``warmup_hits``), and whether it took a detection at f. Frames where that track had
+    already ended have NaN error.
+
+    Returns a dict of lists: ``frame``, ``track``, ``error`` (px), ``warmup`` (bool),
+    ``associated`` (bool).
+    """
+    cols = run.log.columns()
+    frames, tracks = run.match.sequence(obj_id)
+    f_all, xy_all = run.scene.trajectory(obj_id)
+    out: dict[str, list[Any]] = {"frame": [], "track": [], "error": [], "warmup": [],
+                                 "associated": []}
+    held = -1
+    by_track: dict[int, tuple[IntArray, FloatArray, NDArray[np.bool_]]] = {}
+    for f, t in zip(frames.tolist(), tracks.tolist(), strict=True):  # offline, one object
+        if held > 0:
+            if held not in by_track:
+                sel = cols["track_id"] == held
+                by_track[held] = (cols["frame"][sel], cols["predicted_xy"][sel],
+                                  cols["det_index"][sel] >= 0)
+            fr, pred, assoc = by_track[held]
+            i = np.searchsorted(fr, f)
+            truth = xy_all[np.searchsorted(f_all, f)]
+            out["frame"].append(f)
+            out["track"].append(held)
+            if i < fr.size and fr[i] == f:
+                out["error"].append(float(np.linalg.norm(pred[i] - truth)))
+                out["associated"].append(bool(assoc[i]))
+            else:
+                out["error"].append(float("nan"))
+                out["associated"].append(False)
+            out["warmup"].append(bool(assoc[fr < f].sum() < warmup_hits))
+        if t > 0:
+            held = t
+    return out
 
 
 def default_config(scene: Scene) -> TrackerConfig:
@@ -226,11 +347,37 @@ def summarise(run: SceneRun, min_assoc: int = 5) -> dict[str, Any]:
     }
 
 
-def trajectory_plot(run: SceneRun, title: str) -> Any:
-    """The run's trajectories over the empty scene."""
+def trajectory_plot(
+    run: SceneRun,
+    title: str,
+    *,
+    group_of: Callable[[int], str] | None = None,
+    spurious: str = "spurious",
+    truth: bool = True,
+    min_length: int = 5,
+    legend_title: str | None = None,
+) -> Any:
+    """The run's trajectories over the empty scene, coloured by what each track follows.
+
+    Each track (output in at least ``min_length`` frames) is put in the group of the object
+    it follows in most of its rows (within the pairing radius, :meth:`Matching.follows`;
+    ``group_of(obj_id)``, default the object's category) or in ``spurious`` when that is
+    none; the true paths of the objects are drawn dashed beside them.
+    """
     from mvtrack.sim.render import render_background
     from mvtrack.viz.plots import TrackRows, trajectory_figure
 
     rows = TrackRows.from_frames(run.log)
     bg = render_background(run.scene, 0)
-    return trajectory_figure(rows, run.scene.size, bg, title=title, min_length=5)
+    scene = run.scene
+    name = group_of or (lambda v: str(scene.category[v - 1]))
+    ids, obj = run.match.follows()
+    groups = {int(t): (name(int(o)) if o > 0 else spurious) for t, o in zip(ids, obj,
+                                                                          strict=True)}
+    paths = {}
+    if truth:
+        for v in range(1, scene.n_objects + 1):
+            paths[str(v)] = scene.trajectory(v)[1]
+    return trajectory_figure(rows, scene.size, bg, title=title, min_length=min_length,
+                             truth=paths, groups=groups, legend_title=legend_title,
+                             failure_group=spurious)

@@ -139,36 +139,44 @@ given); `iou` uses {BOX:g} × {BOX:g} px boxes (the paper's targets are points).
 def _plot() -> Any:
     """Iso-r² contours through z of both targets under eq. (9) and the corrected region."""
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
-    fig = Figure(figsize=(9, 4.2))
+    from mvtrack.viz.plots import PALETTE
+
+    fig = Figure(figsize=(10, 5.6), layout="constrained")
     axes = fig.subplots(1, 2)
-    gx, gy = np.meshgrid(np.linspace(-8, 18, 261), np.linspace(-8, 18, 261))
+    lo, hi = -10.0, 22.0  # holds both targets' regions through z under both distances
+    gx, gy = np.meshgrid(np.linspace(lo, hi, 321), np.linspace(lo, hi, 321))
     pts = np.stack([gx.ravel(), gy.ravel()], axis=1)
     view = _view(np.zeros(2))
+    titles = {"uncoupled": "Fig. 1 with eq. (9), per axis (a circle, E2.3)",
+              "coupled": "Fig. 1 with the corrected coupled region (ρ = 2)"}
     for ax, name in zip(axes, ("uncoupled", "coupled"), strict=True):
         d = distance_matrix(name, view, pts)
         r2z = distance_matrix(name, view, Z)[:, 0]
-        for k, color in enumerate(("tab:blue", "tab:orange")):
-            ax.contour(
-                gx,
-                gy,
-                d[k].reshape(gx.shape),
-                levels=[9.21],
-                colors=color,
-                linestyles="--",
-                linewidths=1,
-            )
-            ax.contour(gx, gy, d[k].reshape(gx.shape), levels=[r2z[k]], colors=color)
-            ax.arrow(*TARGET_XY[k], *(3 * TARGET_V[k]), color=color, width=0.12)
-            ax.plot(*TARGET_XY[k], "o", color=color, label=f"target {k + 1}: r² = {r2z[k]:.3g}")
-        ax.plot(*Z[0], "k*", ms=12, label="z = (4, 4)")
-        ax.set(
-            aspect="equal",
-            title=f"{name}: solid r² through z, dashed χ² gate 9.21",
-            xlabel="x (px)",
-            ylabel="y (px)",
-        )
-        ax.invert_yaxis()
-        ax.legend(fontsize=7, loc="lower right")
-    fig.suptitle("solid: iso-r² through z; dashed: χ² gate r² = 9.21; arrows: velocity")
+        handles = []
+        for k in range(2):
+            color = PALETTE[k]
+            field = d[k].reshape(gx.shape)
+            ax.contour(gx, gy, field, levels=[9.21], colors=[color], linestyles="--",
+                       linewidths=1)
+            ax.contour(gx, gy, field, levels=[r2z[k]], colors=[color], linewidths=1.6)
+            ax.arrow(*TARGET_XY[k], *(3 * TARGET_V[k]), color=color, width=0.15,
+                     length_includes_head=True)
+            ax.plot(*TARGET_XY[k], "o", color=color)
+            win = " (wins)" if np.argmin(r2z) == k else ""
+            handles.append(Line2D([], [], color=color, marker="o", lw=1.6,
+                                  label=f"target {k + 1}: r² = {r2z[k]:.3g}{win}"))
+        ax.plot(*Z[0], "k*", ms=13)
+        handles += [
+            Line2D([], [], color="black", marker="*", ms=10, ls="none", label="z = (4, 4)"),
+            Line2D([], [], color="0.3", lw=1.6, label="iso-r² through z"),
+            Line2D([], [], color="0.3", lw=1.0, ls="--", label="χ² gate r² = 9.21"),
+            Line2D([], [], color="0.3", marker=r"$\rightarrow$", ms=10, ls="none",
+                   label="predicted velocity"),
+        ]
+        ax.set(aspect="equal", xlim=(lo, hi), ylim=(hi, lo), title=titles[name],
+               xlabel="x (px)", ylabel="y (px)")
+        ax.legend(handles=handles, fontsize=7, loc="upper center",
+                  bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False)
     return fig

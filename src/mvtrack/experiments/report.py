@@ -29,6 +29,11 @@ class Report:
         Markdown paragraphs after the table: setup, what matches, what does not.
     plots : dict
         File stem -> matplotlib Figure, saved as ``NAME_<stem>.png``.
+    variants : dict
+        Settings other than the specification's that the experiment also runs: name -> the
+        reason it is run. The headline figures always use the specification's settings; the
+        variants are listed with their reasons under the table and in the JSON
+        (``variant_reasons``).
     """
 
     name: str
@@ -38,12 +43,20 @@ class Report:
     rows: list[list[Any]]
     notes: str = ""
     plots: dict[str, Any] = field(default_factory=dict)
+    variants: dict[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.variants:
+            self.figures = {**self.figures, "variant_reasons": dict(self.variants)}
 
     def markdown(self) -> str:
-        """The Markdown page: title, table, notes and links to the plots."""
+        """The Markdown page: title, table, variants with their reasons, notes, plots."""
         lines = [f"# {self.title}", "", "| " + " | ".join(self.columns) + " |"]
         lines.append("|" + "---|" * len(self.columns))
         lines += ["| " + " | ".join(_fmt(v) for v in row) + " |" for row in self.rows]
+        if self.variants:
+            lines += ["", "Headline figures use the specification's settings. Variants:", ""]
+            lines += [f"- *{name}*: {why}" for name, why in self.variants.items()]
         if self.notes:
             lines += ["", self.notes.strip()]
         if self.plots:

@@ -245,4 +245,48 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
                  "Python ratio", "NumPy KF", "NumPy RLS", "NumPy ratio"],
         rows=table,
         notes=notes,
+        plots={"table2": _plot(rows, batched)},
+        variants={
+            "batched kernels": f"the tracker's vectorised kernels over {BATCH} targets at once, "
+            "the cost per target the tracker actually pays",
+        },
     )
+
+
+def _plot(rows: list[dict[str, Any]], batched: dict[str, float]) -> Any:
+    """Table 2: the RLS/KF time ratio per N as bars beside the paper's, and the times."""
+    from matplotlib.figure import Figure
+
+    from mvtrack.viz.plots import PALETTE, grouped_bars
+
+    fig = Figure(figsize=(11, 4.2), layout="constrained")
+    left, right = fig.subplots(1, 2)
+    n = [r["iterations"] for r in rows]
+    series = {
+        "paper (1999, Pentium Pro)": [r["paper_ratio"] for r in rows],
+        "ours, pure Python": [r["python_ratio"] for r in rows],
+        "ours, NumPy (one target)": [r["numpy_ratio"] for r in rows],
+    }
+    grouped_bars(left, [f"{v:,}" for v in n], series,
+                 colors=dict(zip(series, ("0.7", PALETTE[0], PALETTE[2]), strict=True)),
+                 hatches={"paper (1999, Pentium Pro)": "//"}, fmt="{:.2f}")
+    left.axhline(1.0, color="black", lw=0.8, ls=":")
+    left.set(xlabel="iterations N", ylabel="time RLS / time KF",
+             title="RLS/KF time ratio (median of repeats)")
+    left.legend(fontsize=7, loc="upper left")
+    for (key, label), marker in zip(
+        (("paper_kf_ms", "paper KF"), ("paper_rls_ms", "paper RLS"),
+         ("python_kf_ms", "ours KF, Python"), ("python_rls_ms", "ours RLS, Python"),
+         ("numpy_kf_ms", "ours KF, NumPy"), ("numpy_rls_ms", "ours RLS, NumPy")),
+        "oo^^ss", strict=True,
+    ):
+        kind = key.split("_")[0]
+        color = {"paper": "0.45", "python": PALETTE[0], "numpy": PALETTE[2]}[kind]
+        ls = "-" if "_kf_" in key else "--"
+        right.loglog(n, [r[key] for r in rows], marker=marker, ls=ls, color=color, label=label)
+    right.set(xlabel="iterations N", ylabel="time (ms)",
+              title=f"times (batched kernels: KF {batched['kf']:.0f} ns, RLS "
+              f"{batched['rls']:.0f} ns per target)")
+    right.legend(fontsize=7, ncol=2, loc="lower right")
+    fig.suptitle("Paper 1 Table 2: time of N update + prediction iterations")
+    return fig

@@ -37,10 +37,11 @@ Where we go beyond paper 3 (each documented on the implementing line):
   by the part's own prediction) and its derivatives decay by ``relation_damping`` per frame,
   so a part hidden for many frames keeps a bounded offset;
 - a filter that receives no information at all keeps its prior covariance (E3.9 otherwise);
-- options ``q_rel`` (relation process noise) and ``relation_noise="occlusion"`` (R_r scaled by
-  1/((1 − α^i)(1 − α^j))); the defaults are the SPEC values. On the X9 scene the SPEC-default
-  CA relations extrapolate the legs' swing while they are hidden; the CV option or stiff
-  relations do not (see the ``occlusion`` experiment).
+- options ``q_rel`` (relation process noise, default Q_r = 0.01·Q_c, E3.12: the parts of one
+  body keep their relative positions far more steadily than the body moves; with Q_r = Q_c the
+  CA relations of the X9 scene learn the legs' swing and extrapolate it while the legs are
+  hidden, see the ``occlusion`` experiment) and ``relation_noise="occlusion"`` (R_r scaled by
+  1/((1 − α^i)(1 − α^j))).
 
 For the tracker, :class:`StructuredPredictor` (name ``structured``, built by
 ``mvtrack.filters.predictors.make_predictor("structured")``) wraps the SKF behind the
@@ -186,8 +187,8 @@ class SKFParams:
     q : float
         Process noise: Q = q·diag(0, 0, 0, 0, 1, 1) (CA) or q·diag(0, 0, 1, 1) (CV).
     q_rel : float or None
-        Process noise of the relation filters (same form); ``None`` means ``q`` (SPEC §3.3 uses
-        one Q for both).
+        Process noise of the relation filters (same form); ``None`` means ``0.01·q``, Q_r =
+        0.01·Q_c (SPEC §3.3, E3.12). ``q_rel=q`` is the first reconstruction's Q_r = Q_c.
     r_cell : float
         Cell measurement variance, R_c = r_cell·I₂ (px²).
     r_rel : float or None
@@ -275,7 +276,7 @@ class SKFParams:
     @property
     def Q_rel(self) -> FloatArray:
         """Process noise covariance of the relation filters."""
-        q = self.q if self.q_rel is None else self.q_rel
+        q = 0.01 * self.q if self.q_rel is None else self.q_rel  # Q_r = 0.01·Q_c (E3.12)
         d = np.zeros(self.n)
         d[-2:] = q
         return np.diag(d)

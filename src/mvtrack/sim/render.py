@@ -167,7 +167,8 @@ def _background(scene: Scene, style: RenderStyle, size: tuple[int, int], margin:
     for occ in scene.meta.get("occluders", []):
         _draw_vehicle(img, to_px(np.array([occ["xy"]], float)), np.zeros(1),
                       np.array([occ["wh"]], float) * np.array([sx, sy]),
-                      np.array([occ["color"]], np.uint8), np.array([[70, 60, 55]], np.uint8))
+                      np.array([occ["color"]], np.uint8),
+                      np.array([occ.get("color2", (70, 60, 55))], np.uint8))
     return img
 
 
@@ -300,7 +301,9 @@ def render_frames(
     for occ in scene.meta.get("occluders", []):
         lo = (np.asarray(occ["xy"], float) - np.asarray(occ["wh"], float) / 2) * scale
         hi = (np.asarray(occ["xy"], float) + np.asarray(occ["wh"], float) / 2) * scale
-        occ_boxes.append((np.floor(lo).astype(int) - 1, np.ceil(hi).astype(int) + 1))
+        bottom = hi[1:] if occ.get("depth", True) else np.array([np.inf])
+        occ_boxes.append((np.floor(lo).astype(int) - 1, np.ceil(hi).astype(int) + 1,
+                          occ.get("hides") == "lower half", bottom))
     for f in range(n_frames):
         dx, dy = float(shifts[f, 0]), float(shifts[f, 1])
         if m:
@@ -333,11 +336,29 @@ def render_frames(
                     _draw_person(img, xy[sel], wh[sel], scene.color[oid], scene.color2[oid])
                 else:
                     _draw_point(img, xy[sel], wh[sel], scene.color[oid])
-            for lo, hi in occ_boxes:  # occluders in front of everything (X8's white car)
+            for lo, hi, lower, bottom_px in occ_boxes:  # occluders in front (X8's car)
                 x0, y0 = max(lo[0] - round(dx), 0), max(lo[1] - round(dy), 0)
                 x1, y1 = min(hi[0] - round(dx), out_w), min(hi[1] - round(dy), out_h)
-                if x1 > x0 and y1 > y0:
+                if x1 <= x0 or y1 <= y0:
+                    continue
+                if not lower:
                     img[y0:y1, x0:x1] = crop[y0:y1, x0:x1]
+                    continue
+                # the car covers only the lower half of each object behind it (feet above the
+                # car's lower edge); an object whose feet are below that edge is in front of
+                # it. Inside its box the car shows except where such an upper half, or an
+                # object in front, is.
+                car = np.ones((y1 - y0, x1 - x0), bool)
+                b_lo = np.floor(xy - wh / 2).astype(int) - 1
+                b_hi = np.ceil(xy + wh / 2).astype(int) + 1
+                behind = xy[:, 1] + wh[:, 1] / 2 <= bottom_px[0] - dy
+                top = np.where(behind, np.round(xy[:, 1]).astype(int), b_hi[:, 1])
+                ux0, ux1 = np.maximum(b_lo[:, 0], x0), np.minimum(b_hi[:, 0], x1)
+                uy0, uy1 = np.maximum(b_lo[:, 1], y0), np.minimum(top, y1)
+                for k in np.flatnonzero((ux1 > ux0) & (uy1 > uy0)):  # the few at the car
+                    car[uy0[k] - y0 : uy1[k] - y0, ux0[k] - x0 : ux1[k] - x0] = False
+                view = img[y0:y1, x0:x1]
+                view[car] = crop[y0:y1, x0:x1][car]
         if style.noise_sigma > 0:
             k, ox, oy = int(pick[f]), int(offs[f, 0]), int(offs[f, 1])
             cv2.add(img, pos[k][oy : oy + out_h, ox : ox + out_w], dst=img)

@@ -187,7 +187,14 @@ def _box_wh(body: FloatArray, heading: FloatArray, rotates: NDArray[np.bool_]) -
 def _visibility(
     xy: FloatArray, wh: FloatArray, size: tuple[int, int], occluders: list[dict[str, Any]]
 ) -> tuple[FloatArray, FloatArray]:
-    """Fraction of each box inside the image, and that fraction minus occluded parts."""
+    """Fraction of each box inside the image, and that fraction minus occluded parts.
+
+    An occluder hides the part of a box inside its rectangle; one with ``hides == "lower
+    half"`` (a parked car that people walk behind: it covers their legs, not their heads)
+    hides only the part of the box's lower half inside it, and only of boxes behind it (their
+    lower edge above the occluder's); a box whose lower edge is below it is in front. With
+    ``depth`` False every box counts as behind it.
+    """
     lo, hi = xy - wh / 2, xy + wh / 2
     area = np.maximum(wh.prod(axis=-1), 1e-12)
     img = np.array(size, dtype=np.float64)
@@ -197,7 +204,11 @@ def _visibility(
     for occ in occluders:  # a handful of static occluders per scene, not per target
         o_lo = np.asarray(occ["xy"], float) - np.asarray(occ["wh"], float) / 2
         o_hi = o_lo + np.asarray(occ["wh"], float)
-        a = np.maximum(lo, np.maximum(o_lo, 0.0))
+        top = lo.copy()
+        if occ.get("hides") == "lower half":  # the lower half of a box behind the occluder
+            behind = hi[..., 1] <= o_hi[1] if occ.get("depth", True) else True
+            top[..., 1] = np.where(behind, xy[..., 1], hi[..., 1])
+        a = np.maximum(top, np.maximum(o_lo, 0.0))
         b = np.minimum(hi, np.minimum(o_hi, img))
         hidden += np.clip(b - a, 0.0, None).prod(axis=-1)
     return np.minimum(inside_frac, 1.0), np.clip((inside - hidden) / area, 0.0, 1.0)
@@ -668,17 +679,23 @@ def x5_intersection(seed: int | np.random.Generator = 0) -> Scene:
 
 
 # ---------------------------------------------------------------------- X8
-def x8_splitting_group(seed: int | np.random.Generator = 0) -> Scene:
+def x8_splitting_group(seed: int | np.random.Generator = 0, car_depth: bool = True) -> Scene:
     """Paper 2's group of three people splitting behind a car, plus 11 others (SPEC X8).
 
     320×240, 15 fps, 240 frames. A static white car 44×22 px centred at (96, 64) is an
-    occluder (``meta["occluders"]``) drawn in front of the people. P1–P3 (ids 1–3, category
-    ``group``) start at (18, 12) with v = (1.2, 0.8), side by side ±9 px across the direction
-    of motion (P1 on the upper-right side), 8×16 px, so their blobs merge. At frame 60 (split
-    point (90, 60), hidden by the car) they change velocity: P1 (1.44, 0.46), P2 (0.25, 1.4),
-    P3 (−0.15, 1.4). Eleven others on straight lines, kept ≥ 30 px (centre distance) from
-    every group member, ≥ 24 px from one another and clear of the car: 6 ``car`` (28×12 px,
-    3–5 px/frame), 2 ``motorcycle`` (12×8 px, 4–6), 3 ``pedestrian`` (8×16 px, 1–1.5).
+    occluder (``meta["occluders"]``) in front of the people that hides at most the lower half
+    of each (``hides = "lower half"``: people walk behind a parked car, which covers their legs
+    and not their heads, SPEC X8 as revised), so the group stays visible while it splits. P1–P3
+    (ids 1–3, category ``group``) start at (18, 12) with v = (1.2, 0.8), side by side ±9 px
+    across the direction of motion (P1 on the upper-right side), 8×16 px, so their blobs
+    merge. With ``car_depth`` False the car hides the lower half of everyone over it, also of
+    people whose feet are already below its lower edge (a variant of the [R] geometry). At
+    frame 60 (split point (90, 60), over the car) they change velocity: P1
+    (1.44, 0.46), P2 (0.25, 1.4), P3 (−0.15, 1.4). Their colours differ from the paving by
+    ≥ 40 grey levels of luma, so each person's visible upper half is one blob. Eleven others
+    on straight lines, kept ≥ 30 px (centre distance) from every group member, ≥ 24 px from
+    one another and clear of the car: 6 ``car`` (28×12 px, 3–5 px/frame), 2 ``motorcycle``
+    (12×8 px, 4–6), 3 ``pedestrian`` (8×16 px, 1–1.5).
     """
     rng = np.random.default_rng(seed)
     n_frames, size = 240, (320, 240)
@@ -692,7 +709,10 @@ def x8_splitting_group(seed: int | np.random.Generator = 0) -> Scene:
     at60 = start + 60.0 * v0
     group = np.where(tt < 60, start + tt * v0, at60 + (tt - 60.0) * v1)  # (F, 3, 2)
     group_hd = np.where(t[:, None] < 60, np.arctan2(v0[1], v0[0]), np.arctan2(v1[:, 1], v1[:, 0]))
-    occ = {"xy": (96.0, 64.0), "wh": (44.0, 22.0), "color": (245, 245, 245)}
+    # a light cabin: the people's upper halves (luma 64–73, skin 169) stand out against every
+    # part of the car they pass in front of
+    occ = {"xy": (96.0, 64.0), "wh": (44.0, 22.0), "color": (245, 245, 245),
+           "color2": (205, 205, 200), "hides": "lower half", "depth": bool(car_depth)}
     occ_lo = np.array(occ["xy"]) - np.array(occ["wh"]) / 2 - 4.0
     occ_hi = np.array(occ["xy"]) + np.array(occ["wh"]) / 2 + 4.0
 
@@ -742,8 +762,9 @@ def x8_splitting_group(seed: int | np.random.Generator = 0) -> Scene:
         "vehicle" if c == "car" else "motorcycle" if c == "motorcycle" else "person"
         for c, *_ in others
     ]
+    # P1 red, P2 blue, P3 green: luma 65, 64, 73 against the paving's 118
     people_colors = np.array(
-        [[30, 30, 200], [200, 60, 20], [30, 160, 30], [20, 20, 20], [220, 220, 60],
+        [[20, 20, 170], [200, 60, 20], [20, 110, 20], [20, 20, 20], [220, 220, 60],
          [40, 200, 230], [180, 40, 160], [240, 240, 240], [0, 120, 255]], np.uint8)
     color = np.zeros((n, 3), np.uint8)
     color[:3] = people_colors[:3]

@@ -78,14 +78,137 @@ def _figure(width: float, height: float):
     return fig
 
 
+#: Dark, distinct qualitative colours (ColorBrewer's diverging schemes' dark ends): each has a
+#: WCAG contrast of at least 3:1 against the light grey of a scene drawn by
+#: :func:`trajectory_figure` (grey level ≥ 200 for a road of grey 96 or brighter).
+PALETTE = (
+    "#2166AC",  # blue
+    "#B2182B",  # red
+    "#1B7837",  # green
+    "#762A83",  # purple
+    "#8C510A",  # brown
+    "#01665E",  # teal
+    "#C51B7D",  # magenta
+    "#6B6B00",  # olive
+    "#08306B",  # navy
+    "#A63603",  # dark orange
+)
+#: Colour of tracks and bars that stand for a failure or for nothing (spurious tracks).
+FAILURE_COLOR = "#595959"
+#: Colour of the ground truth drawn beside the estimates.
+TRUTH_COLOR = "#000000"
+
+
+def relative_luminance(color: object) -> float:
+    """WCAG 2.x relative luminance of a colour (any matplotlib colour specification)."""
+    from matplotlib.colors import to_rgb
+
+    c = np.asarray(to_rgb(color))
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return float(lin @ [0.2126, 0.7152, 0.0722])
+
+
+def contrast_ratio(a: object, b: object) -> float:
+    """WCAG contrast ratio (1 … 21) of two colours."""
+    la, lb = sorted((relative_luminance(a), relative_luminance(b)), reverse=True)
+    return (la + 0.05) / (lb + 0.05)
+
+
+def halo(width: float = 3.0, color: str = "white") -> list:
+    """Path effects that draw a line or text over a wider ``color`` stroke: readable on any
+    background."""
+    from matplotlib import patheffects
+
+    return [patheffects.withStroke(linewidth=width, foreground=color)]
+
+
+def place_labels(
+    ax,
+    anchors: FloatArray,
+    texts: list[str],
+    colors: list[object] | None = None,
+    fontsize: float = 7.0,
+    max_radius: float = 48.0,
+) -> list:
+    """Put one text per anchor (data coordinates) where it overlaps no other label.
+
+    Each label is tried at offsets of growing radius (points) in sixteen directions around its
+    anchor, the text extending away from the anchor, and placed at the first position whose
+    box lies inside the axes and clear of the labels placed before it; a label that finds no
+    place within ``max_radius`` points is left out. A label moved away from its anchor is joined
+    to it by a thin line.
+
+    Returns
+    -------
+    list of matplotlib.text.Annotation
+        The labels placed (fewer than ``texts`` when some found no room).
+    """
+    fig = ax.figure
+    renderer = fig.canvas.get_renderer()
+    inside = ax.get_window_extent(renderer)
+    px = fig.dpi / 72.0
+    colors = colors if colors is not None else ["black"] * len(texts)
+    angles = np.arange(16) * (np.pi / 8) + np.pi / 4
+    radii = np.arange(3.0, max_radius + 1e-9, 3.0)
+    offs = (radii[:, None, None] * np.stack([np.cos(angles), np.sin(angles)], -1)[None]).reshape(
+        -1, 2)  # (candidates, 2) in points, nearest first
+    taken = np.zeros((0, 4))  # x0, y0, x1, y1 of placed labels, display pixels
+    placed = []
+    anchors = np.asarray(anchors, float).reshape(-1, 2)
+    for xy, text, color in zip(anchors, texts, colors, strict=True):
+        probe = ax.text(0, 0, text, fontsize=fontsize)
+        ext = probe.get_window_extent(renderer)
+        probe.remove()
+        w, h = ext.width + 2.0, ext.height + 2.0
+        ax_xy = ax.transData.transform(xy)
+        d = offs * px
+        # the text extends away from its anchor: left/right/centre by the offset's direction
+        sx = np.sign(np.round(offs[:, 0] / np.maximum(np.abs(offs).max(axis=1), 1e-9), 1))
+        sy = np.sign(np.round(offs[:, 1] / np.maximum(np.abs(offs).max(axis=1), 1e-9), 1))
+        x0 = ax_xy[0] + d[:, 0] - w * (1 - sx) / 2
+        y0 = ax_xy[1] + d[:, 1] - h * (1 - sy) / 2
+        box = np.stack([x0, y0, x0 + w, y0 + h], axis=1)
+        ok = ((box[:, 0] >= inside.x0) & (box[:, 2] <= inside.x1) & (box[:, 1] >= inside.y0)
+              & (box[:, 3] <= inside.y1))
+        if taken.size:
+            hit = ((box[:, None, 0] < taken[None, :, 2]) & (box[:, None, 2] > taken[None, :, 0])
+                   & (box[:, None, 1] < taken[None, :, 3]) & (box[:, None, 3] > taken[None, :, 1]))
+            ok &= ~hit.any(axis=1)
+        if not ok.any():
+            continue
+        i = int(np.argmax(ok))
+        ha = {1.0: "left", -1.0: "right", 0.0: "center"}[float(sx[i])]
+        va = {1.0: "bottom", -1.0: "top", 0.0: "center"}[float(sy[i])]
+        far = radii[i // len(angles)] > 3.0
+        ann = ax.annotate(
+            text, xy, xytext=tuple(offs[i]), textcoords="offset points", fontsize=fontsize,
+            color=color, ha=ha, va=va, path_effects=halo(2.5),
+            arrowprops={"arrowstyle": "-", "color": color, "lw": 0.6, "shrinkA": 0,
+                        "shrinkB": 0} if far else None,
+        )
+        taken = np.vstack([taken, box[i]])
+        placed.append(ann)
+    return placed
+
+
 def trajectory_figure(
     rows: TrackRows,
     size: tuple[int, int],
     background: NDArray[np.uint8] | None = None,
     title: str = "",
     min_length: int = 1,
+    *,
+    truth: dict[str, FloatArray] | None = None,
+    groups: dict[int, str] | None = None,
+    group_colors: dict[str, object] | None = None,
+    labels: bool = True,
+    legend_title: str | None = None,
+    failure_group: str = "spurious",
 ):
     """Every track's path over the scene (image coordinates, y down), labelled with its ID.
+
+    The scene is drawn in grey and every path over a white halo, so that each colour reads on
+    any background; labels are placed so that they do not overlap (:func:`place_labels`).
 
     Parameters
     ----------
@@ -94,45 +217,157 @@ def trajectory_figure(
     size : (W, H)
         Image size in pixels.
     background : (H, W, 3) uint8 BGR, optional
-        A frame drawn faintly under the paths.
+        A frame drawn in grey under the paths.
     title : str
         Axes title.
     min_length : int
         Tracks output in fewer frames are left out.
+    truth : dict of str to (T, 2) arrays, optional
+        True paths by name, drawn as dashed black lines beside the estimates.
+    groups : dict of int to str, optional
+        Group (legend entry) of each track ID, e.g. the object it follows; tracks missing from
+        it are drawn in their ID's palette colour without a legend entry.
+    group_colors : dict of str to colour, optional
+        Colour of each group (default: the palette in the groups' natural order, e.g. V1, V2,
+        …, V10; :data:`FAILURE_COLOR` and a dotted line for ``failure_group``).
+    labels : bool
+        Label each path's end with its track ID.
+    legend_title : str, optional
+        Title of the legend (shown when ``groups`` or ``truth`` is given).
+    failure_group : str
+        The group of tracks that follow nothing (drawn grey and dotted, listed last).
     """
-    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
 
     w, h = size
-    fig = _figure(8.0, 8.0 * h / max(w, 1) + 0.4)
+    fig = _figure(8.0, 8.0 * h / max(w, 1) + 0.9)
     ax = fig.add_subplot(1, 1, 1)
     if background is not None:
-        ax.imshow(background[..., ::-1] if background.ndim == 3 else background,
-                  extent=(0, w, h, 0), alpha=0.45, cmap="gray")
+        grey = background.mean(axis=2) if background.ndim == 3 else background
+        # the scene in light grey: the palette keeps a contrast ≥ 3:1 against a road of grey ≥ 96
+        ax.imshow(0.3 * grey.astype(float) + 0.7 * 255.0, extent=(0, w, h, 0), cmap="gray",
+                  vmin=0, vmax=255, interpolation="nearest")
+    handles: list = []
+    for k, path in enumerate((truth or {}).values()):
+        path = np.asarray(path, float)
+        ax.plot(path[:, 0], path[:, 1], ls=(0, (3, 2)), color=TRUTH_COLOR, lw=0.9, zorder=3,
+                path_effects=halo(2.2))
+        if k == 0:
+            handles.append(Line2D([], [], ls=(0, (3, 2)), color=TRUTH_COLOR, lw=0.9,
+                                  label="truth (dashed)"))
     ids, paths, _ = rows.split()
     keep = [i for i, p in enumerate(paths) if len(p) >= min_length]
-    if keep:
-        cmap = _cmap()
-        colors = cmap(np.asarray(ids)[keep] % 20)
-        ax.add_collection(LineCollection([paths[i] for i in keep], colors=colors, linewidths=1.4))
-        ends = np.array([paths[i][-1] for i in keep])
-        starts = np.array([paths[i][0] for i in keep])
-        ax.scatter(starts[:, 0], starts[:, 1], s=8, c=colors, marker="o")
-        for k, i in enumerate(keep):  # one label per track, offline plot
-            ax.annotate(str(int(ids[i])), ends[k], fontsize=7, color=colors[k])
+    colors: dict[str, object] = dict(group_colors or {})
+    used = sorted({groups[int(ids[i])] for i in keep if int(ids[i]) in groups}
+                  if groups is not None else set(), key=_natural)
+    used = [g for g in used if g != failure_group] + (
+        [failure_group] if failure_group in used else [])
+    for g in used:
+        if g not in colors:
+            colors[g] = FAILURE_COLOR if g == failure_group else PALETTE[
+                sum(1 for c in colors if c != failure_group) % len(PALETTE)]
+    track_color = []
+    for i in keep:
+        g = groups.get(int(ids[i])) if groups is not None else None
+        track_color.append(colors[g] if g is not None else PALETTE[int(ids[i]) % len(PALETTE)])
+    for k, i in enumerate(keep):
+        g = groups.get(int(ids[i])) if groups is not None else None
+        ax.plot(paths[i][:, 0], paths[i][:, 1], color=track_color[k], lw=1.6, zorder=4,
+                ls=":" if g == failure_group else "-", path_effects=halo(3.4))
+        ax.plot(*paths[i][0], "o", ms=3.2, color=track_color[k], zorder=5)
+    for g in used:
+        handles.append(Line2D([], [], color=colors[g], lw=1.6,
+                              ls=":" if g == failure_group else "-", label=g))
     ax.set_xlim(0, w)
     ax.set_ylim(h, 0)
     ax.set_aspect("equal")
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
     ax.set_title(title or f"{len(keep)} tracks")
+    if handles:
+        ax.legend(handles=handles, title=legend_title, fontsize=7, title_fontsize=7,
+                  loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
     fig.tight_layout()
+    if labels and keep:
+        ends = []
+        for i in keep:  # the last point of each path inside the image
+            p = paths[i]
+            seen = np.flatnonzero((p[:, 0] >= 0) & (p[:, 0] <= w) & (p[:, 1] >= 0)
+                                  & (p[:, 1] <= h))
+            ends.append(p[seen[-1]] if seen.size else np.clip(p[-1], 0, [w, h]))
+        place_labels(ax, np.array(ends), [str(int(ids[i])) for i in keep], track_color)
     return fig
 
 
-def _cmap():
-    from matplotlib import colormaps
+def _natural(text: str) -> list:
+    """Sort key that orders embedded numbers by value (V2 before V10)."""
+    import re
 
-    return colormaps["tab20"]
+    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", text)]
+
+
+def grouped_bars(
+    ax,
+    categories: list[str],
+    series: dict[str, list[float]],
+    *,
+    errors: dict[str, list[tuple[float, float]]] | None = None,
+    colors: dict[str, object] | None = None,
+    hatches: dict[str, str] | None = None,
+    value_labels: bool = True,
+    fmt: str = "{:.3g}",
+    missing: str = "n/a",
+):
+    """Grouped bars: one group per category, one bar per series, with optional error bars.
+
+    Parameters
+    ----------
+    categories : list of str
+        Tick labels (one group of bars each).
+    series : dict of str to list of float
+        Bar heights per series, in category order; NaN draws no bar and writes ``missing``.
+    errors : dict of str to list of (low, high), optional
+        Interval per bar (e.g. a 95 % binomial interval), drawn as an error bar.
+    colors, hatches : dict, optional
+        Per series (default colours: :data:`PALETTE` in order).
+    value_labels : bool
+        Write each bar's value above it.
+
+    Returns
+    -------
+    dict of str to matplotlib.container.BarContainer
+    """
+    n = len(series)
+    width = 0.8 / max(n, 1)
+    x = np.arange(len(categories), dtype=float)
+    out = {}
+    top = 0.0
+    for k, (name, values) in enumerate(series.items()):
+        v = np.asarray(values, float)
+        pos = x + (k - (n - 1) / 2) * width
+        color = (colors or {}).get(name, PALETTE[k % len(PALETTE)])
+        bars = ax.bar(pos, np.nan_to_num(v), width * 0.92, label=name, color=color,
+                      hatch=(hatches or {}).get(name), edgecolor="black", linewidth=0.6)
+        out[name] = bars
+        hi = v.copy()
+        if errors is not None and name in errors:
+            iv = np.asarray(errors[name], float).reshape(-1, 2)
+            yerr = np.stack([v - iv[:, 0], iv[:, 1] - v])
+            ok = np.isfinite(v)
+            ax.errorbar(pos[ok], v[ok], yerr=yerr[:, ok], fmt="none", ecolor="black",
+                        elinewidth=1.0, capsize=3, zorder=5)
+            hi = np.where(ok, np.maximum(v, iv[:, 1]), v)
+        top = max(top, float(np.nanmax(hi, initial=0.0)))
+        if value_labels:
+            for p, val, h in zip(pos, v, hi, strict=True):
+                text = missing if not np.isfinite(val) else fmt.format(val)
+                ax.annotate(text, (p, 0.0 if not np.isfinite(h) else h), xytext=(0, 2),
+                            textcoords="offset points", ha="center", va="bottom", fontsize=6.5,
+                            rotation=90 if n > 3 else 0)
+    ax.set_xticks(x, categories)
+    ax.set_xlim(-0.6, len(categories) - 0.4)
+    ax.set_ylim(0.0, top * 1.25 if top > 0 else 1.0)
+    return out
 
 
 def track_length_figure(rows: TrackRows, fps: float, title: str = ""):
