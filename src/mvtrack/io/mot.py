@@ -128,6 +128,11 @@ class FrameIndex(Sequence[IntArray]):
             yield empty
 
     @property
+    def rows(self) -> IntArray:
+        """Every row covered (those of frames ``0 .. n - 1``), by frame."""
+        return self._order
+
+    @property
     def num_rows(self) -> int:
         """Rows covered (those of frames ``0 .. n - 1``)."""
         return int(self._order.size)
@@ -274,6 +279,10 @@ class MotTable:
     @classmethod
     def from_detections(cls, frames: Iterable[Detections]) -> MotTable:
         """Rows of a detection file (ID -1) from per-frame :class:`Detections`."""
+        if isinstance(frames, DetectionFrames):  # rows already in a table: O(rows), not O(frames)
+            t = frames.table.take(np.sort(frames.index.rows))
+            minus = np.full(len(t), -1)
+            return cls(t.frame, minus, t.tlwh, t.conf, minus, minus.astype(np.float64))
         parts = [
             (np.full(len(d), d.frame), d.tlwh, d.score) for d in frames if len(d) > 0
         ]
@@ -440,10 +449,9 @@ def _check(path: Path, kind: str, values: FloatArray, lineno: IntArray) -> None:
     check(frame != np.round(frame), 0, "frame (column 1) is {v}, not an integer")
     check(frame < 1, 0, "frame (column 1) is {v}; MOTChallenge frames start at 1")
     check(frame > MAX_FRAME, 0, f"frame (column 1) is {{v}}, above the limit of {MAX_FRAME}")
-    if kind != "det":
-        ids = values[:, 1]
-        check(ids != np.round(ids), 1, "id (column 2) is {v}, not an integer")
-        check(np.abs(ids) > MAX_ID, 1, f"id (column 2) is {{v}}, beyond ±{MAX_ID}")
+    ids = values[:, 1]  # -1 in detection files
+    check(ids != np.round(ids), 1, "id (column 2) is {v}, not an integer")
+    check(np.abs(ids) > MAX_ID, 1, f"id (column 2) is {{v}}, beyond ±{MAX_ID}")
     for col, name in ((2, "left"), (3, "top")):
         check(
             np.abs(values[:, col]) > MAX_COORD, col,
