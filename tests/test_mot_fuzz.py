@@ -50,7 +50,8 @@ ODD_TOKENS = [
     "1_0", "２", "١", "¹", "½", "nan", "NaN", "-nan", "inf", "-inf", "Infinity", "", " ",
     "1e20", "-1e20", "1e999", "-1e999", "1e-400", "9007199254740993", "1e16", "1e7", "1e6",
     "0x10", "#", "e5", "1e", "--1", "1.2.3", "\u00a0", "\x00", "abc", "1,5", "\ufeff1", "−1",
-    "10000000", "10000001", "1000000.5",
+    "10000000", "10000001", "1000000.5", "1000000", "1000000.001", "-1000000.001",
+    "9007199254740991", "9007199254740992", "-9007199254740992",
 ]
 tokens = st.one_of(
     st.sampled_from(ODD_TOKENS),
@@ -82,10 +83,10 @@ def _text(kind: str) -> st.SearchStrategy[str]:
         rows = draw(st.lists(_valid_row(kind), max_size=6))
         if kind == "det":
             rows.sort(key=lambda r: int(r[0]))
-        if rows and draw(st.booleans()):
+        for _ in range(draw(st.integers(0, 3)) if rows else 0):  # break up to three fields
             i = draw(st.integers(0, len(rows) - 1))
             j = draw(st.integers(0, len(rows[i]) - 1))
-            rows[i][j] = draw(tokens)
+            rows[i][j] = draw(st.sampled_from(ODD_TOKENS) | tokens)
         if draw(st.booleans()):  # arbitrary rows of arbitrary fields
             rows += draw(st.lists(st.lists(tokens, max_size=11), max_size=3))
         sep = draw(st.sampled_from([",", ", ", " ", "\t", " , "]))
