@@ -21,7 +21,7 @@ from mvtrack.config import DETECTORS, RunSettings, load_config
 from mvtrack.errors import InputError
 from mvtrack.tracking import TrackerConfig
 
-EXAMPLES = int(os.environ.get("MVTRACK_FUZZ_EXAMPLES", "100"))
+EXAMPLES = int(os.environ.get("MVTRACK_FUZZ_EXAMPLES", "60"))
 FUZZ = settings(
     max_examples=EXAMPLES,
     deadline=None,

@@ -35,7 +35,7 @@ from mvtrack.io.mot import (
 )
 
 #: Examples per test; MVTRACK_FUZZ_EXAMPLES=5000 for a longer hunt.
-EXAMPLES = int(os.environ.get("MVTRACK_FUZZ_EXAMPLES", "100"))
+EXAMPLES = int(os.environ.get("MVTRACK_FUZZ_EXAMPLES", "60"))
 FUZZ = settings(
     max_examples=EXAMPLES,
     deadline=None,
