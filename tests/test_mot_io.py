@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mvtrack.errors import InputError
+from mvtrack.errors import InputError, InputWarning
 from mvtrack.io.mot import (
     MotTable,
     read_detections,
@@ -85,11 +85,13 @@ def test_reader_accepts_whitespace_blank_lines_and_comments(tmp_path: Path) -> N
     np.testing.assert_allclose(dets[0].xy, [[1 + 1.5, 2 + 2]])
 
 
-def test_empty_file_gives_empty_table(tmp_path: Path) -> None:
+def test_empty_file_gives_empty_table_and_a_warning(tmp_path: Path) -> None:
     path = tmp_path / "res.txt"
-    path.write_text("")
-    assert len(read_tracks(path)) == 0
-    assert read_detections(path) == []
+    path.write_text("# only a comment\n\n")
+    with pytest.warns(InputWarning, match=r"res\.txt: the file has no rows"):
+        assert len(read_tracks(path)) == 0
+    with pytest.warns(InputWarning):
+        assert len(read_detections(path)) == 0
 
 
 def test_writer_sorts_results_by_frame_then_id(tmp_path: Path) -> None:
@@ -112,7 +114,7 @@ GOOD = "1,-1,10,10,5,5,0.9,-1,-1,-1\n"
         ("det", "2,-1,10,10,inf,5,0.9,-1,-1,-1\n", "NaN or inf"),
         ("det", "2,-1,10,10,-5,5,0.9,-1,-1,-1\n", "negative width"),
         ("det", "2,-1,10,10,5,-1,0.9,-1,-1,-1\n", "negative height"),
-        ("det", "0,-1,10,10,5,5,0.9,-1,-1,-1\n", ">= 1"),
+        ("det", "0,-1,10,10,5,5,0.9,-1,-1,-1\n", "start at 1"),
         ("det", "1.5,-1,10,10,5,5,0.9,-1,-1,-1\n", "not an integer"),
         ("results", "1,2.5,10,10,5,5,0.9,-1,-1,-1\n", "id"),
     ],

@@ -12,7 +12,17 @@ from typing import Annotated
 
 import typer
 
-from mvtrack.cli import batch, demo, evaluate, experiment, report, simulate, track, track_detections
+from mvtrack.cli import (
+    batch,
+    demo,
+    evaluate,
+    experiment,
+    report,
+    simulate,
+    track,
+    track_detections,
+)
+from mvtrack.errors import one_line_warnings
 
 app = typer.Typer(
     name="mvtrack",
@@ -40,8 +50,15 @@ def _root(
             "--version", callback=_print_version, is_eager=True, help="Print the version and exit."
         ),
     ] = False,
+    verbose: Annotated[
+        bool, typer.Option("--verbose", help="Also show OpenCV's and FFmpeg's own messages.")
+    ] = False,
 ) -> None:
     """Track many moving objects in fixed-camera video, and compare predictors honestly."""
+    if verbose:
+        from mvtrack.io.logs import set_verbose
+
+        set_verbose()
 
 
 for _module in (demo, track, track_detections, batch, evaluate, simulate, experiment, report):
@@ -57,7 +74,8 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``mvtrack`` console script; returns the exit status."""
     command = typer.main.get_command(app)
     try:
-        result = command.main(args=argv, prog_name="mvtrack", standalone_mode=False)
+        with one_line_warnings():
+            result = command.main(args=argv, prog_name="mvtrack", standalone_mode=False)
     except _CLICK_ERROR as exc:
         print(f"error: {exc.format_message()}", file=sys.stderr)  # type: ignore[attr-defined]
         return 2

@@ -2,8 +2,10 @@
 
 TrackEval's dataset loaders want files in its own folder layout; its metric classes only need,
 per timestep, the GT and tracker IDs (remapped to ``0..K-1``) and the GT × tracker similarity
-matrix (box IoU here). TrackEval is optional: when it cannot be imported, :func:`hota` returns
-``None`` and :func:`trackeval_problem` says why.
+matrix (box IoU here). The metric class is TrackEval 1.3.0's own, kept verbatim in
+:mod:`mvtrack._vendor.trackeval` (TrackEval's package cannot be a dependency: it declares
+``opencv-python``). Should it fail to import, :func:`hota` returns ``None`` and
+:func:`trackeval_problem` says why.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ def _import_hota() -> tuple[Any, str | None]:
     sink = io.StringIO()
     try:
         with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
-            from trackeval.metrics import HOTA
+            from mvtrack._vendor.trackeval.metrics import HOTA
     except Exception as exc:  # any import-time failure means: no HOTA, say why
         return None, f"HOTA not computed: trackeval could not be imported ({exc})"
     return HOTA, None

@@ -1,0 +1,1 @@
+"""Third-party code kept verbatim inside mvtrack, each with its licence; see each package."""
