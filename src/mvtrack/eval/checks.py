@@ -70,7 +70,7 @@ def check_inputs(
     if len(pred) == 0:
         return []
     gf, pf = gt.frame + 1, pred.frame + 1
-    if not np.isin(pf, gf).any():
+    if len(pairs) == 0 and np.intersect1d(np.unique(pf), np.unique(gf)).size == 0:
         raise InputError(
             f"the results share no frame with the ground truth (ground truth frames "
             f"{_span(gf)}, results frames {_span(pf)}): not the same sequence?"
@@ -101,7 +101,9 @@ def check_inputs(
             f"boxes ({extent})"
         )
     valid = pairs.iou >= iou
-    matched = np.unique(pairs.b[valid & scored[pairs.a]]).size
+    has_pair = np.zeros(len(pred), dtype=bool)
+    has_pair[pairs.b[valid & scored[pairs.a]]] = True
+    matched = int(has_pair.sum())
     if len(pred) >= MATCHED_WARN_MIN_BOXES and matched < MATCHED_WARN * len(pred):
         notes.append(
             f"only {matched} of {len(pred)} result boxes overlap a ground-truth box at IoU ≥ "

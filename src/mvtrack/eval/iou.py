@@ -11,7 +11,9 @@ one computed by those tools on the same files to the last digit.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
+from itertools import chain
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -20,8 +22,10 @@ from mvtrack.types import FloatArray, IntArray
 
 _EPS = float(np.finfo(np.float64).eps)
 
-#: Candidate pairs handled at once (bounds the memory of :func:`overlapping_pairs`).
-_CHUNK_PAIRS = 1 << 21
+#: Candidate pairs, and boxes of the grid search, handled at once (they bound the memory of
+#: :func:`overlapping_pairs`).
+_CHUNK_PAIRS = 1 << 20
+_BLOCK_BOXES = 1 << 15
 
 
 def _corners(tlwh: FloatArray) -> FloatArray:
@@ -99,9 +103,22 @@ class BoxPairs:
         return list(zip([0, *cuts], [*cuts, self.a.size], strict=True))
 
 
+def _chunks(count: IntArray) -> Iterator[IntArray]:
+    """Groups of consecutive items whose counts add up to about ``_CHUNK_PAIRS`` each."""
+    chunk_id = (np.cumsum(count) - count) // _CHUNK_PAIRS
+    for part in np.split(np.arange(count.size), np.flatnonzero(np.diff(chunk_id)) + 1):
+        if part.size:
+            yield part
+
+
+def _within(count: IntArray) -> IntArray:
+    """``0 … count[i] - 1`` for each item ``i``, concatenated."""
+    return np.arange(int(count.sum()), dtype=np.int64) - np.repeat(np.cumsum(count) - count, count)
+
+
 def _same_frame_pairs(
     frame_a: IntArray, rows_a: IntArray, frame_b: IntArray, rows_b: IntArray
-) -> list[tuple[IntArray, IntArray]]:
+) -> Iterator[tuple[IntArray, IntArray]]:
     """Every same-frame pair of the rows ``rows_a`` of ``a`` and ``rows_b`` of ``b``, in chunks.
 
     ``rows_a`` and ``rows_b`` must be sorted by frame.
@@ -111,58 +128,46 @@ def _same_frame_pairs(
     _, ia, ib = np.intersect1d(va, vb, assume_unique=True, return_indices=True)
     sa, na, sb, nb = sa[ia], na[ia], sb[ib], nb[ib]
     count = na * nb
-    out = []
-    # Chunks of frames holding about _CHUNK_PAIRS pairs each (one frame at most over).
-    chunk_id = (np.cumsum(count) - count) // _CHUNK_PAIRS
-    for f in np.split(np.arange(count.size), np.flatnonzero(np.diff(chunk_id)) + 1):
-        if f.size == 0:
-            continue
+    for f in _chunks(count):
         c = count[f]
-        first = np.repeat(np.cumsum(c) - c, c)
-        k = np.arange(int(c.sum()), dtype=np.int64) - first
-        nb_r = np.repeat(nb[f], c)
-        i = np.repeat(sa[f], c) + k // nb_r
-        j = np.repeat(sb[f], c) + k % nb_r
-        out.append((rows_a[i], rows_b[j]))
-    return out
+        k, nb_r = _within(c), np.repeat(nb[f], c)
+        yield rows_a[np.repeat(sa[f], c) + k // nb_r], rows_b[np.repeat(sb[f], c) + k % nb_r]
 
 
 def _grid_pairs(
     rank_a: IntArray, ca: FloatArray, rank_b: IntArray, cb: FloatArray, cell: FloatArray
-) -> list[tuple[IntArray, IntArray]]:
+) -> Iterator[tuple[IntArray, IntArray]]:
     """Same-frame pairs of boxes whose centres lie in the same or adjacent grid cells.
 
     With cells at least as wide (high) as half the summed widths (heights) of any two of
     the boxes, two overlapping boxes always have their centres in adjacent cells, so this is
-    a superset of the overlapping pairs. ``rank_*`` number the frames 0 … F-1.
+    a superset of the overlapping pairs. ``rank_*`` number the frames 0 … F-1. Yields the
+    pairs in chunks (``a`` in blocks of ``_BLOCK_BOXES``), so memory stays bounded.
     """
     if ca.shape[0] == 0 or cb.shape[0] == 0:
-        return []
+        return
     ga = np.floor(0.5 * (ca[:, :2] + ca[:, 2:]) / cell).astype(np.int64)
     gb = np.floor(0.5 * (cb[:, :2] + cb[:, 2:]) / cell).astype(np.int64)
     lo = np.minimum(ga.min(axis=0), gb.min(axis=0)) - 1
     span = np.maximum(ga.max(axis=0), gb.max(axis=0)) - lo + 2  # cells per axis, padded
     n_frames = int(max(rank_a.max(), rank_b.max())) + 1
     if float(span[0]) * float(span[1]) * n_frames >= 2.0**62:
-        return _grid_pairs(rank_a, ca, rank_b, cb, 2.0 * cell)  # coarser cells still cover
+        yield from _grid_pairs(rank_a, ca, rank_b, cb, 2.0 * cell)  # coarser cells still cover
+        return
     key_a = (rank_a * span[0] + ga[:, 0] - lo[0]) * span[1] + ga[:, 1] - lo[1]
     key_b = (rank_b * span[0] + gb[:, 0] - lo[0]) * span[1] + gb[:, 1] - lo[1]
     order_a, order_b = np.argsort(key_a), np.argsort(key_b)
     sorted_b = key_b[order_b]
     offsets = (np.array([-1, 0, 1])[:, None] * span[1] + np.array([-1, 0, 1])[None, :]).ravel()
-    # (9, Na) neighbouring cells, each row sorted (searchsorted is fastest on sorted needles).
-    near = key_a[order_a][None, :] + offsets[:, None]
-    start = np.searchsorted(sorted_b, near, side="left").ravel()
-    count = np.searchsorted(sorted_b, near, side="right").ravel() - start
-    owner = np.tile(order_a, offsets.size)
-    out = []
-    chunk_id = (np.cumsum(count) - count) // _CHUNK_PAIRS
-    for part in np.split(np.arange(count.size), np.flatnonzero(np.diff(chunk_id)) + 1):
-        c = count[part]
-        first = np.repeat(np.cumsum(c) - c, c)
-        k = np.arange(int(c.sum()), dtype=np.int64) - first
-        out.append((np.repeat(owner[part], c), order_b[np.repeat(start[part], c) + k]))
-    return out
+    for block in np.array_split(order_a, -(-order_a.size // _BLOCK_BOXES)):
+        # (9, n) neighbouring cells, each row sorted (searchsorted is fastest so).
+        near = key_a[block][None, :] + offsets[:, None]
+        start = np.searchsorted(sorted_b, near, side="left").ravel()
+        count = np.searchsorted(sorted_b, near, side="right").ravel() - start
+        owner = np.tile(block, offsets.size)
+        for part in _chunks(count):
+            c = count[part]
+            yield np.repeat(owner[part], c), order_b[np.repeat(start[part], c) + _within(c)]
 
 
 def overlapping_pairs(
@@ -204,20 +209,15 @@ def overlapping_pairs(
     cell = np.concatenate([wh_a[small_a], wh_b[small_b], np.zeros((1, 2))]).max(axis=0)
     cell = np.maximum(cell, 1e-9 * np.maximum(np.abs(ca).max(), 1.0))
     ia, ib = np.flatnonzero(small_a), np.flatnonzero(small_b)
-    candidates = [
-        (ia[i], ib[j]) for i, j in _grid_pairs(rank_a[ia], ca[ia], rank_b[ib], cb[ib], cell)
-    ]
-    # Pairs with a large box: every box of the same frame (pairs of two large ones once).
-    big_a = np.flatnonzero(~small_a)
-    big_b = np.flatnonzero(~small_b)
-    if big_a.size:
-        by_frame_b = np.argsort(fb, kind="stable")
-        candidates += _same_frame_pairs(fa, big_a[np.argsort(fa[big_a], kind="stable")],
-                                        fb, by_frame_b)
-    if big_b.size:
-        sa_rows = ia[np.argsort(fa[ia], kind="stable")]
-        candidates += _same_frame_pairs(fa, sa_rows, fb, big_b[np.argsort(fb[big_b],
-                                                                          kind="stable")])
+    big_a, big_b = np.flatnonzero(~small_a), np.flatnonzero(~small_b)
+    candidates = chain(
+        ((ia[i], ib[j]) for i, j in _grid_pairs(rank_a[ia], ca[ia], rank_b[ib], cb[ib], cell)),
+        # Pairs with a large box: every box of the same frame (pairs of two large ones once).
+        _same_frame_pairs(fa, big_a[np.argsort(fa[big_a], kind="stable")],
+                          fb, np.argsort(fb, kind="stable")),
+        _same_frame_pairs(fa, ia[np.argsort(fa[ia], kind="stable")],
+                          fb, big_b[np.argsort(fb[big_b], kind="stable")]),
+    )
     found = []
     for i, j in candidates:
         iou = _iou(ca[i], cb[j])
