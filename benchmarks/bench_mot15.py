@@ -168,8 +168,14 @@ def score(gt: Path, results: Path, as_given: bool = False) -> dict[str, Any]:
     if as_given:
         pred = MotTable.from_rows(np.loadtxt(results, delimiter=",", ndmin=2))
     s = evaluate(gt, pred, 0.5, ignore="drop")
-    return {k: s[k] for k in ("MOTA", "IDF1", "HOTA", "DetA", "AssA", "IDSW", "FP", "FN",
-                              "num_pred_ids")}
+    out = {k: s[k] for k in ("MOTA", "IDF1", "HOTA", "DetA", "AssA", "IDSW", "FP", "FN",
+                             "num_pred_ids")}
+    if s["num_ignored_gt"]:  # the other readings of the ignore flag, for the report
+        out["ignore_modes"] = {}
+        for mode in ("distractor", "none"):
+            m = evaluate(gt, pred, 0.5, ignore=mode, with_hota=False)
+            out["ignore_modes"][mode] = {k: m[k] for k in ("MOTA", "IDF1", "FP", "FN")}
+    return out
 
 
 # --------------------------------------------------------------------------- peers, run or recorded
@@ -239,6 +245,48 @@ def paired_speed(python: str, rounds: int) -> dict[str, Any]:
         for p in SPEED_PEERS:
             ratios = [a / b for a, b in zip(m["mvtrack"], m[p], strict=True)]
             m[f"ratio_vs_{p}"] = statistics.median(ratios)
+    return out
+
+
+# --------------------------------------------------------------------------- eval at scale
+
+
+def eval_crowd(n: int, work: Path, baseline: Path | None) -> dict[str, Any]:
+    """``mvtrack eval`` on the crowd scene with ``n`` targets: wall and CPU seconds, peak RSS.
+
+    The scene and its tracking come from the command line (``mvtrack simulate crowd --n N
+    --detections``, ``mvtrack track-detections``); the evaluation runs in a child process,
+    measured by the kernel's accounting of that child. With ``baseline`` (a ``src`` folder of
+    another checkout) the same command runs on that code too, interleaved.
+    """
+    import resource
+
+    def run(cmd: list[str], env: dict[str, str] | None = None) -> dict[str, float]:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        subprocess.run(cmd, check=True, capture_output=True, env=env)
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        return {"wall_s": wall, "cpu_s": cpu, "max_rss_mb": after.ru_maxrss / 1024}
+
+    scene = work / f"crowd{n}"
+    exe = [sys.executable, "-m", "mvtrack"]
+    subprocess.run([*exe, "simulate", "crowd", "--n", str(n), "--detections", "--out",
+                    str(scene)], check=True, capture_output=True)
+    subprocess.run([*exe, "track-detections", str(scene / "det.txt"), "--fps", "30", "--out",
+                    str(scene / "trk")], check=True, capture_output=True)
+    cmd = [*exe, "eval", "--gt", str(scene / "gt.txt"), "--pred", str(scene / "trk" / "det.txt")]
+    out: dict[str, Any] = {"n": n, "rows": sum(1 for _ in open(scene / "gt.txt")),
+                           "command": "mvtrack eval --gt gt.txt --pred trk/det.txt"}
+    # ru_maxrss of RUSAGE_CHILDREN is the largest child so far: the baseline runs last.
+    out["after"] = run(cmd)
+    if baseline is not None:
+        env = {**os.environ, "PYTHONPATH": str(baseline)}
+        out["before"] = run(cmd, env)
+        rev = subprocess.run(["git", "-C", str(baseline), "rev-parse", "--short", "HEAD"],
+                             capture_output=True, text=True, check=False)
+        out["before"]["commit"] = rev.stdout.strip() or "?"
     return out
 
 
@@ -324,6 +372,34 @@ def report(result: dict[str, Any], command: str) -> str:
     out += ["## Mean over the four sequences", "", *table(mean), "",
             "## Targets (MOTA and IDF1 ≥ the best IoU-scored peer per sequence; ≥ best + 0.03 "
             "on the mean)", "", *targets(per_seq, mean), ""]
+    flagged = {seq: rows for seq, rows in per_seq.items()
+               if any("ignore_modes" in r for r in rows.values())}
+    for seq, rows in flagged.items():
+        out += [f"## The ignore flag on {seq} (MOTA / IDF1 / FP under each `--ignore`)", "",
+                "| tracker | drop (default) | distractor | none |", "|---|---|---|---|"]
+        for name, r in rows.items():
+            if "ignore_modes" not in r:
+                continue
+            cells = [f"{r['MOTA']:.3f} / {r['IDF1']:.3f} / {r['FP']}"] + [
+                f"{m['MOTA']:.3f} / {m['IDF1']:.3f} / {m['FP']}"
+                for m in r["ignore_modes"].values()]
+            out.append(f"| {name} | " + " | ".join(cells) + " |")
+        out.append("")
+    crowd = result.get("eval_crowd")
+    if crowd:
+        a = crowd["after"]
+        out += [f"## `mvtrack eval` on the crowd scene ({crowd['n']} targets, {crowd['rows']} gt "
+                "rows, 300 frames)", "",
+                f"`mvtrack simulate crowd --n {crowd['n']} --detections`, then "
+                f"`mvtrack track-detections det.txt --fps 30`, then `{crowd['command']}` in a "
+                "child process (kernel accounting of the child: CPU = user + system).", "",
+                "| code | wall s | CPU s | peak RSS MB |", "|---|---:|---:|---:|",
+                f"| this | {a['wall_s']:.1f} | {a['cpu_s']:.1f} | {a['max_rss_mb']:.0f} |"]
+        if "before" in crowd:
+            b = crowd["before"]
+            out.append(f"| before (`--baseline`, commit {b.get('commit', '?')}) | "
+                       f"{b['wall_s']:.1f} | {b['cpu_s']:.1f} | {b['max_rss_mb']:.0f} |")
+        out.append("")
     speed = result.get("speed")
     if speed:
         out += [f"## Speed, paired ({speed['rounds']} interleaved rounds)", "",
@@ -347,6 +423,12 @@ def main(argv: list[str] | None = None) -> int:
                     help=f"write the peers' rows to {RECORDED.relative_to(REPO)}")
     ap.add_argument("--speed-rounds", type=int, default=0,
                     help="interleaved speed rounds against the Rust and C++ SORT (peers needed)")
+    ap.add_argument("--eval-crowd", type=int, default=0, metavar="N",
+                    help="also time `mvtrack eval` on the crowd scene with N targets")
+    ap.add_argument("--baseline", type=Path,
+                    help="with --eval-crowd: a src/ folder of older code, timed the same way")
+    ap.add_argument("--skip-trackers", action="store_true",
+                    help="only the --eval-crowd measurement")
     ap.add_argument("--out", type=Path, help="write the Markdown report here")
     ap.add_argument("--json", type=Path, help="write every figure here")
     ap.add_argument("--dump-peer-outputs", nargs=4, metavar=("DET", "GT", "FPS", "DIR"),
@@ -361,6 +443,11 @@ def main(argv: list[str] | None = None) -> int:
 
     import numpy as np
 
+    if args.skip_trackers:
+        with tempfile.TemporaryDirectory() as tmp:
+            crowd = eval_crowd(args.eval_crowd or 1000, Path(tmp), args.baseline)
+        print(json.dumps(crowd, indent=1))
+        return 0
     python = peers_python(args.peers_python)
     per_seq: dict[str, dict[str, dict[str, Any]]] = {}
     recorded = json.loads(RECORDED.read_text()) if RECORDED.exists() else None
@@ -396,6 +483,9 @@ def main(argv: list[str] | None = None) -> int:
         "environment": {"python": platform.python_version(), "numpy": np.__version__,
                         "cpus": os.cpu_count()},
     }
+    if args.eval_crowd:
+        with tempfile.TemporaryDirectory() as tmp:
+            result["eval_crowd"] = eval_crowd(args.eval_crowd, Path(tmp), args.baseline)
     if python and args.speed_rounds:
         result["speed"] = {"rounds": args.speed_rounds,
                            "sequences": paired_speed(python, args.speed_rounds)}
