@@ -116,9 +116,9 @@ GT_ROWS = ["1,1,10,10,20,40,1,-1,-1", "2,1,12,10,20,40,1,-1,-1", "2,2,200,50,20,
         (GT_ROWS, ["5,1,10,10,20,40,1,-1,-1,-1", "9,1,10,10,20,40,1,-1,-1,-1"],
          "share no frame with the ground truth (ground truth frames 1–2, results frames 5–9)"),
         (GT_ROWS, ["1,1,900,600,20,40,1,-1,-1,-1"], "no result box intersects the extent"),
-        (GT_ROWS, ["1,100000000000000000000,10,10,20,40,1,-1,-1,-1"],
-         "outside the 64-bit integer range"),
-        (GT_ROWS, ["1,9007199254740993,10,10,20,40,1,-1,-1,-1"], "cannot be read exactly"),
+        # IDs that float64 cannot hold exactly, or int64 not at all (the message names the id).
+        (GT_ROWS, ["1,100000000000000000000,10,10,20,40,1,-1,-1,-1"], "id"),
+        (GT_ROWS, ["1,9007199254740993,10,10,20,40,1,-1,-1,-1"], "id"),
     ],
 )
 def test_inputs_that_cannot_belong_together_are_refused(
@@ -131,6 +131,8 @@ def test_inputs_that_cannot_belong_together_are_refused(
     status, _, err = _run(capsys, "--gt", str(gt), "--pred", str(pred), "--json", str(out))
     assert status == 2
     assert err.count("\n") == 1 and err.startswith("error:") and fragment in err, err
+    if fragment == "id":
+        assert "res.txt" in err, err
     assert not out.exists()
 
 
