@@ -6,12 +6,12 @@ holds their SHA-256 as that wheel's ``RECORD`` lists them, and the tests check e
 against it. Only the two ``__init__.py`` files are mvtrack's: they import what HOTA needs and
 nothing else (TrackEval's own import the dataset loaders, plotting and the other metrics).
 
-Why a copy rather than a dependency: every TrackEval release on PyPI (1.0.0 to 1.3.0) and its
-SoccerNet fork declare ``opencv-python``, which installs a second ``cv2`` over the
-``opencv-contrib-python-headless`` that mvtrack uses (and needs libGL). pip offers no way to
-drop one dependency of a package, so depending on TrackEval breaks a plain ``pip install``.
-HOTA itself needs only NumPy and SciPy, and its code has not changed since TrackEval 1.0.0
-but for type hints. With a copy, ``mvtrack eval`` always reports HOTA.
+Why a copy in the tests rather than a test dependency: every TrackEval release on PyPI (1.0.0
+to 1.3.0) and its SoccerNet fork declare ``opencv-python``, which installs a second ``cv2`` over
+the ``opencv-contrib-python-headless`` that mvtrack uses (and needs libGL); pip offers no way to
+drop one dependency of a package. ``mvtrack.eval.hota`` computes HOTA on the sparse list of
+overlapping boxes (memory bounded for thousands of targets); this copy is the independent
+reference it is tested against, where the TrackEval package itself is not installed.
 """
 
 #: SHA-256 (URL-safe base64, as in a wheel's RECORD) of each verbatim file.

@@ -1,1 +1,0 @@
-"""Third-party code kept verbatim inside mvtrack, each with its licence; see each package."""
