@@ -1,7 +1,8 @@
 """The install: HOTA is always computed and equals TrackEval's, one cv2.
 
 The README's two commands are plain ``pip install``s. These tests fail when what they install
-stops working as a whole: HOTA silently missing (``None``), the reference copy of TrackEval edited, or
+stops working as a whole: HOTA silently missing (``None``), the reference copy of TrackEval
+edited, or
 two OpenCV distributions writing the same ``cv2`` package.
 """
 

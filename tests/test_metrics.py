@@ -279,7 +279,7 @@ def test_real_sequences_match_trackeval(
 
 
 def _trackeval_hota_class() -> Any:
-    """TrackEval's HOTA metric class: the package's, or its released files kept in tests/reference."""
+    """TrackEval's HOTA metric class: the package's, or its released files in tests/reference."""
     sink = io.StringIO()
     for name in ("trackeval.metrics", "reference.trackeval.metrics"):
         try:
