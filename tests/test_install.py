@@ -2,8 +2,7 @@
 
 The README's two commands are plain ``pip install``s. These tests fail when what they install
 stops working as a whole: HOTA silently missing (``None``), the reference copy of TrackEval
-edited, or
-two OpenCV distributions writing the same ``cv2`` package.
+edited, or two OpenCV distributions writing the same ``cv2`` package.
 """
 
 from __future__ import annotations
