@@ -72,8 +72,6 @@ def register(app: typer.Typer) -> None:
         }
         if gate is not None:
             changes["gate"] = parse_gate(gate)
-        elif distance is not None:
-            changes["gate"] = None  # the chosen distance's default, not the preset's
         if backfill is not None:
             changes["backfill"] = backfill
         config = make_preset(preset, fps=fps, **changes)

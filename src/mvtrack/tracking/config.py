@@ -13,6 +13,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from mvtrack.tracking.scores import check_scale
+
 #: Assignment rules understood by :func:`mvtrack.association.assign`.
 ASSIGN_RULES = ("nearest", "greedy", "optimal")
 
@@ -154,6 +156,23 @@ class TrackerConfig:
         Default 2, for a detector's boxes; the video pipeline turns it off for the
         disturbance map's blobs, which merge and split
         (:func:`mvtrack.pipeline.resolve_settings`).
+    score_scale : {"auto", "prob"} or (lo, hi)
+        How detection scores are read (:mod:`mvtrack.tracking.scores`): ``"auto"`` ranks each
+        score among those of the run so far (offline: of the whole file), so thresholds work
+        on any detector's scale; ``"prob"`` takes them as probabilities; ``(lo, hi)`` maps
+        ``lo … hi`` linearly onto 0 … 1. ``score_high`` and ``min_score`` are on this
+        calibrated scale.
+    score_high : float or None
+        Calibrated score in [0, 1] from which a detection is *high*: only high detections are
+        matched in the first stages and start tracks; the others (*low*) are offered only to
+        the established tracks left unmatched, in a last stage with the first stage's
+        distance and gate, so a track lives on through a partial occlusion without clutter
+        starting tracks (the association of ByteTrack). ``None``: every detection is high.
+    min_score : float
+        Calibrated score in [0, 1] below which a detection is dropped before association.
+    nms_iou : float or None
+        Within a frame, a detection that overlaps a higher-scored one by at least this IoU is
+        dropped before association (duplicate suppression); ``None`` disables it.
     backfill : bool
         Offline runs only (:func:`~mvtrack.tracking.track_detections`): once a track is
         confirmed, the rows of its tentative frames — from its first detection on — are
@@ -191,6 +210,10 @@ class TrackerConfig:
     size_gate: float | None = 2.0
     backfill: bool = True
     interpolate: bool = True
+    score_scale: str | tuple[float, float] = "auto"
+    score_high: float | None = None
+    min_score: float = 0.0
+    nms_iou: float | None = None
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -251,6 +274,19 @@ class TrackerConfig:
         s = self.size_smoothing
         if not isinstance(s, (int, float)) or not (0.0 < s <= 1.0):
             raise bad("size_smoothing", "must be in (0, 1]")
+        try:
+            check_scale(self.score_scale)
+        except ValueError as exc:
+            raise bad("score_scale", str(exc)) from None
+        for name in ("score_high", "min_score", "nms_iou"):
+            v = getattr(self, name)
+            if v is None and name != "min_score":
+                continue
+            if not isinstance(v, (int, float)) or not (0.0 <= v <= 1.0):
+                tail = "" if name == "min_score" else " or None"
+                raise bad(name, f"must be a number in [0, 1]{tail}")
+        if self.nms_iou is not None and self.nms_iou <= 0:
+            raise bad("nms_iou", "must be > 0 or None")
         for name in ("predictor_params", "distance_params", "assign_params"):
             if not isinstance(getattr(self, name), Mapping):
                 raise bad(name, "must be a mapping of keyword arguments")
@@ -384,7 +420,8 @@ def preset(name: str, **overrides: Any) -> TrackerConfig:
 
     Overrides the preset function takes (``fps``, on which its frame-based paper values
     depend, and ``predictor`` for ``paper1``) are passed to it; the others replace fields of
-    its result. Changing ``distance`` without a ``gate`` uses the new distance's default.
+    its result. Changing ``distance`` to another one without a ``gate`` uses the new
+    distance's default; naming the preset's own distance changes nothing.
     """
     try:
         build = PRESETS[name]
@@ -392,11 +429,11 @@ def preset(name: str, **overrides: Any) -> TrackerConfig:
         raise ValueError(
             f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}"
         ) from None
-    if "distance" in overrides and "gate" not in overrides:
-        overrides["gate"] = None  # the new distance's own default gate
     # arguments the preset itself takes (fps, paper 1's predictor) go to it, the rest replace
     # fields of its result
     takes = inspect.signature(build).parameters
     own = {k: overrides.pop(k) for k in list(overrides) if k in takes}
     config = build(**own)
+    if overrides.get("distance", config.distance) != config.distance and "gate" not in overrides:
+        overrides["gate"] = None  # a new distance: its own default gate
     return config.replace(**overrides) if overrides else config
