@@ -211,8 +211,8 @@ class TrackerConfig:
     backfill: bool = True
     interpolate: bool = True
     score_scale: str | tuple[float, float] = "auto"
-    score_high: float | None = None
-    min_score: float = 0.0
+    score_high: float | None = 0.5
+    min_score: float = 0.2
     nms_iou: float | None = None
 
     def __post_init__(self) -> None:
@@ -330,7 +330,8 @@ def _round(x: float) -> int:
 
 
 #: what both paper presets share: R = 4 px² (SPEC §2.1 [R]), the predictors' own priors, no
-#: recovery stage, no scaling with the box size or size gate, paper 1's warm-up gate centre
+#: recovery stage, no scaling with the box size or size gate, every detection used whatever
+#: its score (the papers' detections have none), paper 1's warm-up gate centre
 #: until 2M = 6 associations
 _PAPER_COMMON: dict[str, Any] = {
     "size_ref": None,
@@ -342,6 +343,8 @@ _PAPER_COMMON: dict[str, Any] = {
     "recover_speed": None,
     "second_gate": None,
     "size_gate": None,
+    "score_high": None,
+    "min_score": 0.0,
     "warmup": True,
     "warmup_hits": 6,
 }
@@ -404,7 +407,11 @@ def default(fps: float = 30.0) -> TrackerConfig:
     boxes (``size_ref``). Confirmation on 2 consecutive hits; a track coasts up to 0.3 s but
     its coasting rows are output only for the first 0.08 s (``coast_output``). A track and a
     detection whose box widths or heights differ by more than a factor 2 are never paired
-    (``size_gate``; off in the video pipeline). Offline runs
+    (``size_gate``; off in the video pipeline). Detection scores are ranked among the
+    run's (``score_scale="auto"``): the lowest 20 % are dropped (``min_score``), those below
+    the median only extend established tracks (``score_high``); chosen by leave-one-sequence-out
+    on the MOT15 public detections (docs/bench/mot15-defaults.md). Detections without a score
+    (blobs, simulations) are all high. Offline runs
     (:func:`~mvtrack.tracking.track_detections`) write a confirmed track from its first
     detection on (``backfill``) and the gaps it bridged in full, interpolated
     (``interpolate``)."""

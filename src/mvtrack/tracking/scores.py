@@ -10,11 +10,11 @@ read on a *calibrated* scale ``c ∈ [0, 1]`` given by ``TrackerConfig.score_sca
 
     .. math:: c(s) = \\frac{\\#\\{s_j \\le s\\}}{n},
 
-    over the ``n`` scores of the run up to and including the current frame (online), or over
-    the whole file when the run is offline and its scores are known beforehand
-    (:meth:`ScoreCalibration.prime`). ``c`` depends only on the order of the scores, so any
-    strictly increasing rescaling of a detector's scores gives the same tracks, and a
-    threshold ``score_high = 0.3`` means "the lowest 30 % of this detector's boxes". A run
+    over the ``n`` scores of the run up to and including the current frame (online and, by
+    default, offline), or over given scores (:meth:`ScoreCalibration.prime`). ``c`` depends
+    only on the order of the scores, so any strictly increasing rescaling of a detector's
+    scores gives the same tracks, and a threshold ``score_high = 0.3`` means "above the
+    lowest 30 % of this detector's boxes". A run
     whose scores are all equal (detections without a score, blobs) has ``c = 1`` everywhere.
     Memory is bounded: past ``capacity`` scores the sorted sample keeps every second one.
 ``"prob"``

@@ -33,7 +33,7 @@ is built by :func:`mvtrack.filters.predictors.make_predictor`.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -202,12 +202,6 @@ def _detection_rows(dets: Detections) -> FloatArray:
     rows[:m, 2:] = dets.wh
     rows[m] = np.nan
     return rows
-
-
-def _subset(dets: Detections, rows: NDArray[np.intp]) -> Detections:
-    """The detections ``rows`` of ``dets`` (frame, boxes, scores and areas)."""
-    return Detections(dets.frame, dets.xy.take(rows, 0), dets.wh.take(rows, 0),
-                      dets.score.take(rows), dets.area.take(rows))
 
 
 def _put_state(state: Any, idx: NDArray[np.intp], new: Any) -> Any:
@@ -402,7 +396,7 @@ class Tracker:
                 if self._scale_r:
                     r_rows = pred.r * self._r_factor(f2)  # r max(f_x, f_y)² per track
             staged = False
-            first = dets if sel is None else _subset(dets, sel[0])  # the high detections
+            first = dets if sel is None else dets.take(sel[0])  # the high detections
             if len(first) == 0:
                 mt = md = ud = _EMPTY
             elif self._fast_gate is not None:
@@ -803,10 +797,11 @@ def track_detections(
     (:func:`mvtrack.tracking.log.backfill`); with ``config.interpolate`` the gaps a track
     bridged are written in full, interpolated (:func:`mvtrack.tracking.log.interpolate_gaps`).
 
-    The run is offline, so the ``"auto"`` score scale is calibrated on every score of the run
-    (:meth:`Tracker.prime_scores`): ``scores`` when given, else those of ``frames`` when it is
-    a sequence (a list, or what :func:`mvtrack.io.mot.read_detections` returns); an iterator
-    is calibrated on the scores seen so far, as online.
+    The ``"auto"`` score scale is calibrated on the scores seen so far, as online (the same
+    thresholds mean the same in both modes); ``scores`` (for example every score of the file)
+    calibrates it on those instead (:meth:`Tracker.prime_scores`). On the MOT15 development
+    sequences the run-so-far calibration measured better offline too
+    (``docs/bench/mot15-defaults.md``).
     """
     config = TrackerConfig() if config is None else config
     own = isinstance(config, TrackerConfig)
@@ -816,10 +811,6 @@ def track_detections(
     if fill:  # every coasting row, to be interpolated or cut to coast_output afterwards
         inner = inner.replace(coast_output=None)
     tracker = Tracker(inner)
-    if scores is None and isinstance(frames, Sequence):
-        table = getattr(frames, "table", None)
-        scores = (table.conf if table is not None
-                  else np.concatenate([d.score for d in frames] + [np.zeros(0)]))
     if scores is not None:
         tracker.prime_scores(scores)
     out: list[TrackFrame] = []
