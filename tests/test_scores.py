@@ -37,7 +37,7 @@ def test_prime_fixes_the_calibration():
 
 
 def test_capacity_keeps_every_second_score():
-    cal = ScoreCalibration("auto", capacity=8)
+    cal = ScoreCalibration("auto", capacity=8, batch=1)
     cal(np.arange(9.0))  # 9 > 8: the sorted 0..8 thinned to 1, 3, 5, 7
     assert cal._sorted.tolist() == [1.0, 3.0, 5.0, 7.0]
     assert cal([4.0]).tolist() == [3 / 5]  # 4 joined: 1, 3, 4, 5, 7
@@ -67,3 +67,15 @@ def test_duplicates_greedy_suppression_by_hand():
     assert dup.tolist() == [True, False, True, False]
     # above the threshold nothing is a duplicate
     assert not duplicates(xy, wh, np.array([3.0, 2.0, 1.0, 0.5]), 0.61).any()
+
+
+def test_pending_scores_give_the_same_calibration_as_one_sorted_sample():
+    rng = np.random.default_rng(1)
+    frames = [rng.normal(size=rng.integers(0, 9)) for _ in range(200)]
+    batched, direct = ScoreCalibration("auto", batch=16), ScoreCalibration("auto", batch=0)
+    seen = np.zeros(0)
+    for s in frames:
+        seen = np.concatenate([seen, s])
+        ref = np.searchsorted(np.sort(seen), s, side="right") / max(seen.size, 1)
+        np.testing.assert_allclose(batched(s), ref, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(direct(s), ref, rtol=0, atol=1e-15)

@@ -156,6 +156,10 @@ class TrackerConfig:
         Default 2, for a detector's boxes; the video pipeline turns it off for the
         disturbance map's blobs, which merge and split
         (:func:`mvtrack.pipeline.resolve_settings`).
+    min_track_length : float or None
+        Seconds. Offline runs only (:func:`~mvtrack.tracking.track_detections`): a track with
+        fewer output rows than this many seconds of frames is left out whole
+        (:func:`mvtrack.tracking.log.drop_short_tracks`). ``None`` keeps every track.
     score_scale : {"auto", "prob"} or (lo, hi)
         How detection scores are read (:mod:`mvtrack.tracking.scores`): ``"auto"`` ranks each
         score among those of the run so far (offline: of the whole file), so thresholds work
@@ -210,6 +214,7 @@ class TrackerConfig:
     size_gate: float | None = 2.0
     backfill: bool = True
     interpolate: bool = True
+    min_track_length: float | None = None
     score_scale: str | tuple[float, float] = "auto"
     score_high: float | None = 0.5
     min_score: float = 0.2
@@ -278,6 +283,11 @@ class TrackerConfig:
             check_scale(self.score_scale)
         except ValueError as exc:
             raise bad("score_scale", str(exc)) from None
+        mtl = self.min_track_length
+        if mtl is not None and not (
+            isinstance(mtl, (int, float)) and math.isfinite(mtl) and mtl >= 0
+        ):
+            raise bad("min_track_length", "must be a finite number of seconds >= 0 or None")
         for name in ("score_high", "min_score", "nms_iou"):
             v = getattr(self, name)
             if v is None and name != "min_score":

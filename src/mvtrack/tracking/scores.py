@@ -76,6 +76,9 @@ class ScoreCalibration:
         The calibration.
     capacity : int
         ``"auto"`` only: the most scores kept (sorted); past it every second one is dropped.
+    batch : int
+        ``"auto"`` only: scores kept unsorted beside the sorted sample before they are merged
+        into it (the calibration is the same; only its cost changes).
 
     Examples
     --------
@@ -84,21 +87,26 @@ class ScoreCalibration:
     [0.75, 0.25, 1.0, 0.5]
     """
 
-    def __init__(self, scale: str | tuple[float, float] = "auto", capacity: int = 8192) -> None:
+    def __init__(
+        self, scale: str | tuple[float, float] = "auto", capacity: int = 8192, batch: int = 64
+    ) -> None:
         self.scale = check_scale(scale)
         self.capacity = int(capacity)
-        self._sorted = np.zeros(0)
-        self._primed = False
+        self.batch = int(batch)
+        self.reset()
 
     def reset(self) -> None:
         """Forget the scores seen (and any priming)."""
-        self._sorted = np.zeros(0)
+        self._sorted = np.zeros(0)  # the scores seen, sorted, but the latest ones
+        self._pending = np.empty(self.batch)  # the latest ones (first _n), unsorted
+        self._n = 0
         self._primed = False
 
     def prime(self, scores: ArrayLike) -> None:
         """Calibrate on ``scores`` (e.g. every score of an offline run) and stop learning."""
         s = np.sort(np.asarray(scores, dtype=np.float64).reshape(-1))
         self._sorted = s[np.isfinite(s)]
+        self._n = 0
         self._primed = True
 
     def __call__(self, scores: ArrayLike) -> FloatArray:
@@ -110,15 +118,28 @@ class ScoreCalibration:
             lo, hi = self.scale
             return np.clip((s - lo) / (hi - lo), 0.0, 1.0)
         if not self._primed and s.size:
-            new = np.sort(s)
-            at = np.searchsorted(self._sorted, new)
-            self._sorted = np.insert(self._sorted, at, new)
-            if self._sorted.size > self.capacity:
-                self._sorted = self._sorted[1::2]
-        n = self._sorted.size
+            self._learn(s)
+        pending = self._pending[: self._n]
+        n = self._sorted.size + self._n
         if n == 0:
             return np.ones_like(s)
-        return np.searchsorted(self._sorted, s, side="right") / n  # c(s) = #{s_j <= s} / n
+        below = np.searchsorted(self._sorted, s, side="right")
+        if self._n:
+            below += np.count_nonzero(pending <= s[:, None], axis=1)
+        return below / n  # c(s) = #{s_j <= s} / n
+
+    def _learn(self, s: FloatArray) -> None:
+        """Add ``s`` to the scores seen: to the pending ones, merged into the sorted sample
+        once more than ``batch`` are pending (so a frame costs no copy of the sample)."""
+        if self._n + s.size <= self.batch:
+            self._pending[self._n : self._n + s.size] = s
+            self._n += s.size
+            return
+        merged = np.concatenate([self._sorted, self._pending[: self._n], s])
+        merged.sort()
+        while merged.size > self.capacity:
+            merged = merged[1::2]
+        self._sorted, self._n = merged, 0
 
 
 def duplicates(

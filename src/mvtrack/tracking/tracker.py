@@ -47,6 +47,7 @@ from mvtrack.association.gating import candidate_pairs
 from mvtrack.filters.predictors import make_predictor
 from mvtrack.tracking import associate as fast_assoc
 from mvtrack.tracking.config import TrackerConfig
+from mvtrack.tracking.config import _round as _round_frames
 from mvtrack.tracking.fastkf import CVState, FastCVPredictor
 from mvtrack.tracking.lifecycle import (
     CONFIRMED,
@@ -56,7 +57,7 @@ from mvtrack.tracking.lifecycle import (
     hand_out_ids,
     next_state,
 )
-from mvtrack.tracking.log import TrackLog, backfill, interpolate_gaps
+from mvtrack.tracking.log import TrackLog, backfill, drop_short_tracks, interpolate_gaps
 from mvtrack.tracking.scores import ScoreCalibration, duplicates
 from mvtrack.types import Detections, TrackFrame
 
@@ -832,6 +833,8 @@ def track_detections(
         out = backfill(out, uids)
     if fill:
         out = interpolate_gaps(out, config.frames().coast_output)
+    if own and config.min_track_length is not None:  # whole tracks shorter than this go
+        out = drop_short_tracks(out, _round_frames(config.min_track_length * config.fps))
     log = TrackLog()
     for tf in out:
         log.append(tf)
