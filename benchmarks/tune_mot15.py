@@ -122,8 +122,25 @@ def report(entries: list[dict[str, Any]], command: str, seconds: float,
         lines.append(f"| {held} | {_fmt(pick['cfg'])} | {r[f'{held}|online']['MOTA']:.3f} / "
                      f"{r[f'{held}|online']['IDF1']:.3f} | {r[f'{held}|offline']['MOTA']:.3f} / "
                      f"{r[f'{held}|offline']['IDF1']:.3f} |")
+    from mvtrack.tracking import TrackerConfig
+
+    defaults = TrackerConfig()
+    ranked = sorted(entries, key=lambda e: -objective(e["res"], seqs))
+    mine = [i for i, e in enumerate(ranked)
+            if all(getattr(defaults, k) == v for k, v in e["cfg"].items())]
     lines += ["", f"Best on all four: {_fmt(best['cfg'])} (objective "
-              f"{objective(best['res'], seqs):.4f}).", "",
+              f"{objective(best['res'], seqs):.4f}).", ""]
+    if mine:
+        e = ranked[mine[0]]
+        lines += [f"The defaults (`TrackerConfig()`): {_fmt(e['cfg'])}, objective "
+                  f"{objective(e['res'], seqs):.4f}, rank {mine[0] + 1} of {len(ranked)}; "
+                  "online MOTA / IDF1 "
+                  f"{_mean(e['res'], 'online', 'MOTA'):.3f} / "
+                  f"{_mean(e['res'], 'online', 'IDF1'):.3f}, offline "
+                  f"{_mean(e['res'], 'offline', 'MOTA'):.3f} / "
+                  f"{_mean(e['res'], 'offline', 'IDF1'):.3f}. Where they differ from the best, "
+                  "`docs/association.md` says why.", ""]
+    lines += ["",
               "## Sensitivity (one parameter moved from the best on all four)", "",
               "| parameter | value | online MOTA | online IDF1 | offline MOTA | offline IDF1 |",
               "|---|---|---:|---:|---:|---:|"]
