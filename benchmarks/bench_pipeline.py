@@ -10,9 +10,9 @@ Sequences:
   rendered here instead (the table says which).
 
 Stages, each timed over the whole sequence, built exactly as ``mvtrack track --no-video`` builds
-them (:func:`mvtrack.pipeline.resolve_settings` for the video's size, then
-:func:`~mvtrack.pipeline.build_detector`, :func:`~mvtrack.pipeline.build_tracker`,
-:func:`~mvtrack.pipeline.build_rescuer`, run by :func:`~mvtrack.pipeline.run_frames`):
+them (:func:`mvtrack.video.resolve_settings` for the video's size, then
+:func:`~mvtrack.video.build_detector`, :func:`~mvtrack.video.build_tracker`,
+:func:`~mvtrack.video.build_rescuer`, run by :func:`~mvtrack.video.run_frames`):
 ``decode`` (``open_source`` only), ``+ detect`` (decode and the disturbance map with the
 pipeline's size-dependent defaults), ``+ track`` (also the ``default`` tracker preset at the
 source's frame rate, ``templates.enabled = false``) and ``+ track + templates`` (also template
@@ -112,7 +112,7 @@ def run_stage(
 ) -> tuple[int, float, float]:
     """Frames processed, CPU seconds and wall seconds for one pass of ``stage`` over ``video``."""
     from mvtrack.config import RunSettings
-    from mvtrack.pipeline import (
+    from mvtrack.video import (
         build_detector,
         build_rescuer,
         build_tracker,

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.detection.template import TemplateBank, TemplateRescuer, gate_radius_of
+from mvtrack.detection.template import TemplateBank
+from mvtrack.video.rescue import TemplateRescuer, gate_radius_of
 
 H, W = 120, 160
 VW, VH = 18, 12  # vehicle box
@@ -384,7 +385,7 @@ def test_build_rescuer_gives_the_bank_the_detectors_mask_and_min_pixels() -> Non
     pytest.importorskip("mvtrack.tracking.tracker")
     from mvtrack.config import RunSettings
     from mvtrack.detection import DisturbanceMap
-    from mvtrack.pipeline import build_rescuer, build_tracker
+    from mvtrack.video import build_rescuer, build_tracker
 
     tracker = build_tracker(RunSettings(), 30.0)
     dm = DisturbanceMap(min_area=40)

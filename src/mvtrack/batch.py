@@ -172,7 +172,7 @@ def track_video(
         Output folder (``results.txt``, ``summary.json``, ``trajectories.png``, ``tracks.mp4``).
     settings : RunSettings
         As built by ``mvtrack track`` from its options; the size-dependent defaults are filled
-        in here for this video's size (:func:`mvtrack.pipeline.resolve_settings`).
+        in here for this video's size (:func:`mvtrack.video.resolve_settings`).
     fps : float, optional
         Frame rate to assume instead of the source's.
     max_frames : int, optional
@@ -187,13 +187,13 @@ def track_video(
     """
     import cv2
 
-    from mvtrack import pipeline
+    from mvtrack.video import track_video
 
     cv2.setNumThreads(1)
     t0 = time.perf_counter()
     item = BatchItem(video=video, out=out, status="failed")
     try:
-        run = pipeline.track_video(
+        run = track_video(
             video, out, settings, fps=fps, max_frames=max_frames, progress=False
         )
     except KeyboardInterrupt:
@@ -239,7 +239,7 @@ def _finished_on_disk(item: BatchItem, since: float) -> BatchItem | None:
                      seconds=float(summary.get("seconds", 0.0)))
 
 
-#: the files :func:`mvtrack.pipeline.track_to_folder` writes (each through a temporary file)
+#: the files :func:`mvtrack.video.track_to_folder` writes (each through a temporary file)
 _OUTPUTS = ("results.txt", "summary.json", "trajectories.png", "tracks.mp4")
 
 
@@ -259,7 +259,7 @@ def check_settings(settings: RunSettings) -> None:
     ValueError
         Unknown preset, predictor, distance, assignment rule, detector or parameter.
     """
-    from mvtrack.pipeline import (
+    from mvtrack.video import (
         REFERENCE_SIZE,
         build_detector,
         build_rescuer,

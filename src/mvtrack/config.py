@@ -23,7 +23,7 @@ over the file::
 An unknown table or key is an :class:`~mvtrack.errors.InputError` naming the file and key, so a
 misspelt setting never passes silently. Tracker keys are checked against ``TrackerConfig``'s
 fields, detector and template keys against the constructor of the front end / template bank
-when those are built (:mod:`mvtrack.pipeline`).
+when those are built (:mod:`mvtrack.video.build`).
 """
 
 from __future__ import annotations

@@ -57,7 +57,7 @@ def register(app: typer.Typer) -> None:
         Ctrl-C stops early and still writes what was tracked (exit status 130).
         """
         from mvtrack.errors import InputError
-        from mvtrack.pipeline import track_video
+        from mvtrack.video import track_video
 
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")

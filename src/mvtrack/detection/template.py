@@ -7,19 +7,19 @@ detection in its gate, the grey patch of its last detected bounding box is searc
 normalised cross-correlation (NCC) within the gate radius of the prediction, and a match with
 NCC ≥ 0.8 holds the track (the tracker puts it in state ``STOPPED``, same ID).
 
-:class:`TemplateBank` keeps one template per track, keyed by the tracker's internal ``uid``:
+:class:`TemplateBank` keeps one template per track, keyed by an integer ``uid`` (the caller's
+identity of the track), and takes arrays in: it knows nothing of the tracker.
 
 * :meth:`TemplateBank.observe` records the detected boxes of this frame's tracks (arrays, no
   per-track work); the grey patch is cut *lazily*, only when a track is first missed, from the
   frame of its last detection (the bank keeps that one frame). A track that is detected again
   gets its template refreshed the same way at its next miss.
 * :meth:`TemplateBank.rescue` matches the missed tracks (few per frame; the only per-track
-  loop, each on a small search window).
+  loop, each on a small search window); :meth:`TemplateBank.bind` wraps it as a
+  ``rescue(uids, predicted_xy, wh) -> (found, xy)`` callback.
 * :meth:`TemplateBank.retain` / :meth:`TemplateBank.drop` forget deleted tracks.
 
-:class:`TemplateRescuer` is the adapter the video pipeline uses: ``callback(frame)`` gives the
-``rescue(uids, predicted_xy, wh) -> (found, xy)`` argument of ``Tracker.step`` and
-``observe(frame, dets, tracks)`` feeds the bank from the step's output.
+The video package connects the bank to the tracker (:mod:`mvtrack.video.rescue`).
 
 Coordinates follow :mod:`mvtrack.detection.blobs`: pixel ``(col, row)`` has centre
 ``(x, y) = (col, row)``; a box of centre ``x`` and width ``w`` covers columns
@@ -30,13 +30,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
 
 import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-from mvtrack.types import Detections, TrackFrame
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -587,7 +584,7 @@ class TemplateBank:
         return found, out, score
 
     def bind(self, frame: Image, gate_radius: float | None = None) -> RescueFn:
-        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for ``Tracker.step`` on ``frame``."""
+        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` on ``frame`` (a tracker's callback)."""
 
         def rescue(
             uids: IntArray, predicted_xy: FloatArray, wh: FloatArray
@@ -596,125 +593,3 @@ class TemplateBank:
             return found, xy
 
         return rescue
-
-
-def gate_radius_of(tracker: Any, default: float) -> float:
-    """The tracker's gate as a radius in px when its distance is Euclidean, else ``default``.
-
-    Mahalanobis-type and IoU gates have no single radius in pixels; there the bank's own
-    ``gate_radius`` (paper 1's 20 px) is used.
-    """
-    config = getattr(tracker, "config", None)
-    gate = getattr(tracker, "_gate", None)
-    if config is not None and getattr(config, "distance", None) == "euclidean" and gate:
-        return math.sqrt(float(gate))
-    return default
-
-
-class TemplateRescuer:
-    """Adapter between a :class:`TemplateBank` and ``Tracker.step(dets, rescue=...)``.
-
-    Per frame ``k``::
-
-        dets = detector(frame)
-        out = tracker.step(dets, rescue=rescuer.callback(frame))
-        rescuer.observe(frame, dets, out)
-
-    Parameters
-    ----------
-    bank : TemplateBank
-        The templates and the search parameters.
-    tracker : mvtrack.tracking.Tracker, optional
-        The tracker whose output is observed: needed to map the public IDs of its output rows
-        to the internal ``uid`` the rescue callback receives, and to forget deleted tracks.
-        May be given later with :meth:`attach`.
-    gate_radius : float, optional
-        Search radius in px; default: the tracker's gate radius for the Euclidean distance
-        (``sqrt(gate)``), else the bank's ``gate_radius``.
-    detector : FrontEnd, optional
-        The detection front end; its foreground ``mask`` after each frame restricts the
-        templates to the objects' own pixels (see :meth:`TemplateBank.observe`). Strongly
-        recommended: without it a template is the whole box, road included, and it can keep
-        matching the empty road after a pedestrian or vehicle has left.
-    max_radius : float, optional
-        Search no farther than this (px) from the centre the tracker gives, even if the gate
-        is wider. For a caller that accepts only matches this close (the pipeline's
-        ``max_shift`` around a stopped vehicle's last position) the rest of the gate is
-        wasted work: an NCC over a 20 px gate costs (2·20 + 1)² placements, over 4 px 9².
-    """
-
-    def __init__(
-        self,
-        bank: TemplateBank,
-        tracker: Any = None,
-        gate_radius: float | None = None,
-        detector: Any = None,
-        max_radius: float | None = None,
-    ) -> None:
-        if max_radius is not None and not max_radius >= 0:
-            raise ValueError(f"max_radius must be ≥ 0 px or None, got {max_radius}")
-        self.bank = bank
-        self.tracker = tracker
-        self.detector = detector
-        self._radius = gate_radius
-        self.max_radius = None if max_radius is None else float(max_radius)
-
-    def attach(self, tracker: Any) -> None:
-        """Use ``tracker`` (and forget templates of any previous one)."""
-        self.tracker = tracker
-        self.bank.clear()
-
-    @property
-    def gate_radius(self) -> float:
-        """The search radius in px (the gate, capped at ``max_radius``)."""
-        if self._radius is not None:
-            r = float(self._radius)
-        else:
-            r = gate_radius_of(self.tracker, self.bank.gate_radius)
-        return r if self.max_radius is None else min(r, self.max_radius)
-
-    def callback(self, frame: Image) -> RescueFn:
-        """The ``rescue`` argument of ``tracker.step`` for ``frame``."""
-        return self.bank.bind(frame, self.gate_radius)
-
-    def observe(self, frame: Image, dets: Detections, tracks: TrackFrame) -> None:
-        """Record the detected boxes of this frame's tracks; forget deleted tracks.
-
-        Rows of ``tracks`` with ``det_index ≥ 0`` and a public ID are stored under the
-        tracker's internal uid (``tracker.row_uids``, row-aligned with its last output; or, for
-        a tracker without it, looked up through ``tracker.tracks`` by ``track_id``) with the
-        detection's box (the last detected appearance). Deleted tracks are forgotten once the
-        bank holds more tracks than the tracker has live ones (so at most twice as many).
-        """
-        if self.tracker is None:
-            raise ValueError("TemplateRescuer: attach a tracker before observing frames")
-        det = tracks.det_index
-        rows = det >= 0
-        if getattr(getattr(self.tracker, "config", None), "output_tentative", True):
-            rows &= tracks.track_id > 0  # tentative rows (ID −1) are output too
-        row_uids = getattr(self.tracker, "row_uids", None)
-        if row_uids is not None and len(row_uids) == len(det):
-            uids = row_uids[rows]
-            d = det[rows]
-        else:
-            uids, d = self._uids_by_id(tracks.track_id[rows], det[rows])
-        table = self.tracker.tracks
-        if self.bank.uids.size > len(table):  # some are dead: forget them
-            self.bank.retain(table.uid)
-        mask = getattr(self.detector, "mask", None) if self.detector is not None else None
-        if mask is not None and mask.shape != frame.shape[:2]:
-            raise ValueError(f"observe: mask is {mask.shape}, the frame {frame.shape[:2]}")
-        self.bank._record(frame, uids, dets.xy[d], dets.wh[d], mask)
-
-    def _uids_by_id(self, ids: IntArray, det: IntArray) -> tuple[IntArray, IntArray]:
-        """Internal uids of public ``ids`` through ``tracker.tracks`` (unknown ones dropped)."""
-        table = self.tracker.tracks
-        t_uid = np.asarray(table.uid, np.int64)
-        t_id = np.asarray(table.track_id, np.int64)
-        if not (t_id.size and ids.size):
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        order = np.argsort(t_id, kind="stable")
-        sorted_ids = t_id[order]
-        pos = np.minimum(np.searchsorted(sorted_ids, ids), t_id.size - 1)
-        ok = sorted_ids[pos] == ids
-        return t_uid[order][pos][ok], det[ok]

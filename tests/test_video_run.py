@@ -1,4 +1,4 @@
-"""The video pipeline: frame loop, early ends (Ctrl-C, a failing source) and whole runs."""
+"""The video package: frame loop, early ends (Ctrl-C, a failing source) and whole runs."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from mvtrack.config import RunSettings
-from mvtrack.pipeline import run_frames, track_to_folder
 from mvtrack.types import Detections, TrackFrame
+from mvtrack.video import run_frames, track_to_folder
 
 
 def squares_video(
@@ -232,8 +232,8 @@ def _gate_probe(config, offset_dir: np.ndarray, factor: float) -> bool:
     """Track one target moving 2 px/frame for 12 frames, then put the next detection at
     ``factor`` times the outermost drawn gate's extent along ``offset_dir`` (the second-stage
     circle where the tracker has one); True if it is associated."""
-    from mvtrack.pipeline import next_gates, second_gates
     from mvtrack.tracking import Tracker
+    from mvtrack.video.gates import next_gates, second_gates
     from mvtrack.viz.annotate import gate_ellipses
 
     tracker = Tracker(config)
@@ -268,8 +268,8 @@ def test_drawn_gate_is_the_trackers_gate(preset: str, direction: tuple[float, fl
 
 
 def test_size_dependent_defaults_scale_with_the_image() -> None:
-    from mvtrack.pipeline import resolve_settings
     from mvtrack.tracking import TrackerConfig
+    from mvtrack.video import resolve_settings
 
     base = TrackerConfig()
     small = resolve_settings(RunSettings(), (320, 240))
@@ -367,7 +367,7 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
     somewhere before it is searched is the template bank's check, tests/test_template.py.)"""
     from types import SimpleNamespace
 
-    from mvtrack.pipeline import StoppedVehicleRescuer
+    from mvtrack.video import StoppedVehicleRescuer
 
     class FindsAll:
         def __init__(self) -> None:
