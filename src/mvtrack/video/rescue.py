@@ -105,14 +105,15 @@ class StoppedVehicleRescuer:
 def gate_radius_of(tracker: Any, default: float) -> float:
     """The tracker's gate as a radius in px when its distance is Euclidean, else ``default``.
 
-    Mahalanobis-type and IoU gates have no single radius in pixels; there the bank's own
-    ``gate_radius`` (paper 1's 20 px) is used.
+    The radius is ``sqrt(r²)`` of the tracker's gates (:meth:`~mvtrack.tracking.Tracker.gates`),
+    the circle of a box up to ``size_ref``. Mahalanobis-type and IoU gates have no single
+    radius in pixels; there the bank's own ``gate_radius`` (paper 1's 20 px) is used.
     """
     config = getattr(tracker, "config", None)
-    gate = getattr(tracker, "_gate", None)
-    if config is not None and getattr(config, "distance", None) == "euclidean" and gate:
-        return math.sqrt(float(gate))
-    return default
+    if getattr(config, "distance", None) != "euclidean" or not hasattr(tracker, "gates"):
+        return default
+    r2 = tracker.gates().r2
+    return math.sqrt(float(r2)) if r2 else default
 
 
 class TemplateRescuer:
@@ -162,6 +163,7 @@ class TemplateRescuer:
         self.detector = detector
         self._radius = gate_radius
         self.max_radius = None if max_radius is None else float(max_radius)
+        self._tracker_radius: tuple[Any, float] | None = None  # (tracker, its gate radius)
 
     def attach(self, tracker: Any) -> None:
         """Use ``tracker`` (and forget templates of any previous one)."""
@@ -173,8 +175,11 @@ class TemplateRescuer:
         """The search radius in px (the gate, capped at ``max_radius``)."""
         if self._radius is not None:
             r = float(self._radius)
-        else:
-            r = gate_radius_of(self.tracker, self.bank.gate_radius)
+        else:  # a tracker's gate does not change: read it once
+            if self._tracker_radius is None or self._tracker_radius[0] is not self.tracker:
+                radius = gate_radius_of(self.tracker, self.bank.gate_radius)
+                self._tracker_radius = (self.tracker, radius)
+            r = self._tracker_radius[1]
         return r if self.max_radius is None else min(r, self.max_radius)
 
     def callback(self, frame: Image) -> RescueFn:

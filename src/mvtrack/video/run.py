@@ -22,7 +22,6 @@ from numpy.typing import NDArray
 from mvtrack.config import RunSettings
 from mvtrack.types import Detections, TrackFrame
 from mvtrack.video.build import build_detector, build_rescuer, build_tracker
-from mvtrack.video.gates import next_gates, second_gates
 from mvtrack.video.loop import PipelineResult, run_frames
 from mvtrack.video.settings import resolve_settings
 
@@ -68,7 +67,9 @@ def track_to_folder(
       of the rows with a measurement (confirmed, or stopped and held by template matching);
       coasting predictions are drawn in the video but not written;
     - ``tracks.mp4`` — the annotated video (unless ``settings.video`` is False): boxes in
-      their state colour, IDs, trails and the predicted gates (ellipse or circle);
+      their state colour, IDs, trails and the gates the tracker applies to the next frame
+      (:meth:`~mvtrack.tracking.Tracker.gates`: ellipses or circles, stretched for large
+      boxes; the second stage's gates dimmer);
     - ``trajectories.png`` — every track's path over the first frame;
     - ``summary.json`` — frames, tracks, states histogram, speed, settings, ``ended_early``;
     - ``frameNNNNN.png`` — one annotated frame, if ``snapshot`` is given.
@@ -149,12 +150,11 @@ def track_to_folder(
             if writer is None and not shot:
                 return
             gates: dict[str, Any] = {}
-            if settings.gates:
-                _, center, shape, r2 = next_gates(tracker, k + 1)
-                gates = {"gate_center": center, "gate_cov": shape, "gate_r2": r2}
-                outer = second_gates(tracker, k + 1)
-                if outer is not None:
-                    gates["outer_r2"] = outer[1]
+            if settings.gates:  # the confirmed tracks' gates for the next frame
+                g = tracker.gates()
+                g = g.take(g.track_id > 0)
+                gates = {"gate_center": g.center, "gate_cov": g.shape, "gate_r2": g.r2,
+                         "outer_cov": g.second_shape, "outer_r2": g.second_r2}
             text = [f"frame {k}  tracks {len(tracks)}", label]
             img = annotate_frame(image, tracks, trails=trails, text=text, **gates)
             if writer is not None:
