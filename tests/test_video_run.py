@@ -255,7 +255,7 @@ def _gate_probe(config, offset_dir: np.ndarray, factor: float, wh=(10.0, 8.0)) -
     return bool(len(out) and out.det_index[out.track_id == gates.track_id[0]][0] >= 0)
 
 
-@pytest.mark.parametrize("preset", ["paper1", "paper2", "default"])
+@pytest.mark.parametrize("preset", ["paper1", "paper2", "default", "mahalanobis"])
 @pytest.mark.parametrize("direction", [(1.0, 0.0), (0.0, 1.0), (1.0, -1.0)])
 @pytest.mark.parametrize("wh", [(10.0, 8.0), (150.0, 40.0)])
 def test_drawn_gate_is_the_trackers_gate(
@@ -264,9 +264,14 @@ def test_drawn_gate_is_the_trackers_gate(
     """A 150×40 box is larger than the default preset's size_ref: its gates stretch along x,
     and the drawn gate stretches with them. (The recovery stage, around the last measurement,
     is no gate and is not drawn: it is off here; its radius grows with large boxes too.)"""
+    from mvtrack.tracking import TrackerConfig
     from mvtrack.tracking import preset as make_preset
 
-    config = make_preset(preset, fps=30.0).replace(recover_speed=None)
+    if preset == "mahalanobis":  # the closed-form kalman-cv's disc, (P̄ + r f²) I
+        config = TrackerConfig(fps=30.0, distance="mahalanobis", gate=None, second_gate=None)
+    else:
+        config = make_preset(preset, fps=30.0)
+    config = config.replace(recover_speed=None)
     d = np.asarray(direction)
     assert _gate_probe(config, d, 0.97, wh)
     assert not _gate_probe(config, d, 1.03, wh)
