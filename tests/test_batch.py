@@ -122,10 +122,10 @@ def test_missing_video_is_reported_and_others_complete(videos, tmp_path, schedul
     assert [v["status"] for v in data["videos"]] == ["ok", "failed", "failed", "ok"]
     assert data["videos"][1]["error"] == items[1].error
     good = data["videos"][3]
-    assert set(good) == {"video", "out", "status", "frames", "tracks", "fps", "seconds",
-                         "error"}
+    assert set(good) == {"video", "out", "status", "frames", "tracks", "processing_speed",
+                         "seconds", "error"}
     assert good["frames"] == 40 and good["tracks"] == items[3].tracks
-    assert good["seconds"] > 0 and good["fps"] > 0
+    assert good["seconds"] > 0 and good["processing_speed"] > 0
     assert good["video"] == str(videos["cam_a"].absolute())
     assert data["settings"]["video"] is False
     assert not (tmp_path / "out" / "nope" / "results.txt").exists()

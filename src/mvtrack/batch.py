@@ -70,8 +70,8 @@ class BatchItem:
         Frames tracked.
     tracks : int
         Tracks found.
-    fps : float or None
-        Processing speed of its tracking loop (frames per second).
+    processing_speed : float or None
+        Frames its tracking loop processed per second.
     seconds : float
         Wall time of the task on its worker (open, track, write files).
     error : str or None
@@ -83,7 +83,7 @@ class BatchItem:
     status: str = "cancelled"
     frames: int = 0
     tracks: int = 0
-    fps: float | None = None
+    processing_speed: float | None = None
     seconds: float = 0.0
     error: str | None = None
 
@@ -202,7 +202,8 @@ def track_video(
         item.error = _one_line(exc)
     else:
         res, summary = run.result, run.summary
-        item.frames, item.tracks, item.fps = res.n_frames, int(summary["tracks"]), summary["fps"]
+        item.frames, item.tracks = res.n_frames, int(summary["tracks"])
+        item.processing_speed = summary["processing_speed"]
         if res.interrupted:
             item.status = "cancelled"
             item.error = f"interrupted after {res.n_frames} frames; results so far are in {out}"
@@ -235,7 +236,8 @@ def _finished_on_disk(item: BatchItem, since: float) -> BatchItem | None:
     if summary.get("ended_early", True) or summary.get("source") != item.video:
         return None
     return BatchItem(item.video, item.out, "ok", frames=int(summary["frames"]),
-                     tracks=int(summary["tracks"]), fps=summary.get("fps"),
+                     tracks=int(summary["tracks"]),
+                     processing_speed=summary.get("processing_speed"),
                      seconds=float(summary.get("seconds", 0.0)))
 
 

@@ -167,7 +167,8 @@ def register(app: typer.Typer) -> None:
             + f"; summary in {out / 'batch.json'}"
         )
         for it in ok:
-            typer.echo(f"  {it.out}: {it.frames} frames, {it.tracks} tracks, {it.fps} fps")
+            typer.echo(f"  {it.out}: {it.frames} frames, {it.tracks} tracks, "
+                       f"{it.processing_speed} frames/s")
         for it in failed:
             print(f"error: {it.video}: {it.error}", file=sys.stderr)
         if cancelled:

@@ -73,7 +73,7 @@ def register(app: typer.Typer) -> None:
         res, summary = run.result, run.summary
         typer.echo(
             f"{summary['frames']} frames, {summary['tracks']} tracks, "
-            f"{summary['fps']} fps; files in {out}"
+            f"{summary['processing_speed']} frames/s processed; files in {out}"
         )
         for path in run.paths.values():
             typer.echo(f"  {path}")

@@ -343,7 +343,7 @@ def summarise(run: SceneRun, min_assoc: int = 5) -> dict[str, Any]:
         "spurious": int((obj == 0).sum()),
         "coverage": coverage,
         "frames": run.result.n_frames,
-        "fps": round(run.result.fps, 1),
+        "processing_speed": round(run.result.processing_speed, 1),
     }
 
 

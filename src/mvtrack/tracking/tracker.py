@@ -40,7 +40,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack import _batch
 from mvtrack.association.assign import assign as assign_pairs
 from mvtrack.association.distances import TrackView, get_distance
 from mvtrack.association.gating import candidate_pairs
@@ -58,7 +57,7 @@ from mvtrack.tracking.lifecycle import (
     next_state,
 )
 from mvtrack.tracking.log import TrackLog, backfill, interpolate_gaps
-from mvtrack.types import Detections, TrackFrame
+from mvtrack.types import Detections, TrackFrame, concat_rows, take_rows
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -85,7 +84,7 @@ class TrackTable:
     """The ``N`` live tracks as a struct of arrays (the predictor state is kept beside it).
 
     The columns are stored in two blocks, one ``int64`` and one ``float64``, so that growing
-    and shrinking the table costs two array operations (``mvtrack._batch.take`` / ``concat``
+    and shrinking the table costs two array operations (``types.take_rows`` / ``concat_rows``
     work on it too); the properties give each column by name.
 
     Attributes
@@ -174,7 +173,7 @@ def _take_state(state: Any, idx: NDArray[np.intp] | slice) -> Any:
         if isinstance(idx, slice):
             return CVState(state.x[idx], state.P[idx])
         return CVState(state.x.take(idx, 0), state.P.take(idx, 0))
-    return _batch.take(state, idx)
+    return take_rows(state, idx)
 
 
 def _kept_rows(delete: BoolArray) -> NDArray[np.intp] | slice:
@@ -219,7 +218,7 @@ def _put_state(state: Any, idx: NDArray[np.intp], new: Any) -> Any:
 def _concat_state(a: Any, b: Any) -> Any:
     if type(a) is CVState:
         return CVState(np.concatenate([a.x, b.x]), np.concatenate([a.P, b.P]))
-    return _batch.concat(a, b)
+    return concat_rows(a, b)
 
 
 def _build_predictor(config: TrackerConfig) -> Any:

@@ -89,8 +89,8 @@ class PipelineResult:
         return self.interrupted or self.error is not None
 
     @property
-    def fps(self) -> float:
-        """Frames per second of the whole loop."""
+    def processing_speed(self) -> float:
+        """Frames processed per second of wall time by the whole loop (not the frame rate)."""
         return self.n_frames / self.seconds if self.seconds > 0 else float("nan")
 
 

@@ -71,7 +71,8 @@ def track_to_folder(
       (:meth:`~mvtrack.tracking.Tracker.gates`: ellipses or circles, stretched for large
       boxes; the second stage's gates dimmer);
     - ``trajectories.png`` — every track's path over the first frame;
-    - ``summary.json`` — frames, tracks, states histogram, speed, settings, ``ended_early``;
+    - ``summary.json`` — frames, tracks, states histogram, ``processing_speed`` (frames
+      processed per second; ``video_fps`` is the frame rate), settings, ``ended_early``;
     - ``frameNNNNN.png`` — one annotated frame, if ``snapshot`` is given.
 
     Ctrl-C during the loop ends it early; the files are still written for the frames
@@ -196,7 +197,7 @@ def track_to_folder(
         },
         "detections": result.n_detections,
         "states": rows.state_histogram(),
-        "fps": round(result.fps, 2) if result.n_frames else None,
+        "processing_speed": round(result.processing_speed, 2) if result.n_frames else None,
         "seconds": round(result.seconds, 3),
         "ended_early": result.ended_early,
         "interrupted": result.interrupted,
