@@ -323,14 +323,14 @@ def test_gate_radius_follows_a_euclidean_tracker_gate() -> None:
 def test_masked_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None:
     import cv2
 
-    from mvtrack.detection.template import _Template, masked_ncc
+    from mvtrack.detection.ncc import Template, masked_ncc
 
     rng = np.random.default_rng(th)
     win = cv2.GaussianBlur(rng.integers(0, 256, (th + 41, tw + 41), dtype=np.uint8), (5, 5), 0)
     patch = win[7 : 7 + th, 11 : 11 + tw].copy()
     mask = np.zeros_like(patch)
     mask[th // 4 :, tw // 5 :] = 255
-    t = _Template(patch, mask, (0.0, 0.0), 0)
+    t = Template(patch, mask, (0.0, 0.0), 0)
     ours = masked_ncc(win, t.tz, t.mf, t.var_t)
     ref = cv2.matchTemplate(win, patch, cv2.TM_CCOEFF_NORMED, mask=mask)
     np.testing.assert_allclose(ours, ref, atol=2e-4)

@@ -35,15 +35,13 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mvtrack.detection.ncc import Template, grey, masked_ncc
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 Image = NDArray[np.uint8]
 RescueFn = Callable[[IntArray, FloatArray, FloatArray], tuple[BoolArray, FloatArray]]
-
-
-def _grey(img: Image) -> Image:
-    return img if img.ndim == 2 else cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
 
 
 def _member(a: IntArray, b: IntArray) -> BoolArray:
@@ -53,84 +51,6 @@ def _member(a: IntArray, b: IntArray) -> BoolArray:
     b = np.sort(b)
     pos = np.minimum(np.searchsorted(b, a), b.size - 1)
     return b[pos] == a
-
-
-class _Template:
-    """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
-    the observation tick; for a masked template also the terms of :func:`masked_ncc`."""
-
-    __slots__ = ("gate", "mask", "mf", "n", "offset", "patch", "tick", "tz", "var_t")
-
-    def __init__(
-        self,
-        patch: Image,
-        mask: Image | None,
-        offset: tuple[float, float],
-        tick: int,
-        mean: float | None = None,
-    ) -> None:
-        self.patch = patch
-        self.mask = mask
-        self.offset = offset
-        self.tick = tick
-        # the gate mask of the last search and its key (placements' shape, offset of the
-        # first placement's centre from the search centre): a stopped vehicle is searched
-        # around the same place frame after frame, so the mask is usually reused
-        self.gate: tuple[tuple[int, int, float, float, float], Image] | None = None
-        if mask is not None:
-            self.mf = (mask > 0).astype(np.float32)
-            self.n = float(cv2.countNonZero(mask))
-            if mean is None:
-                mean = cv2.mean(patch, mask)[0]
-            self.tz = patch.astype(np.float32)
-            self.tz -= mean
-            self.tz *= self.mf  # T − T̄ on the mask, 0 off it
-            self.var_t = float(cv2.norm(self.tz, cv2.NORM_L2SQR))
-
-
-def masked_ncc(
-    window: Image,
-    tz: NDArray[np.float32],
-    mf: NDArray[np.float32],
-    var_t: float,
-    n: float | None = None,
-) -> NDArray[np.float32]:
-    r"""NCC of a template over its mask pixels ``M`` only, at every placement in ``window``.
-
-    .. math::
-
-        \mathrm{NCC}(u) = \frac{\sum_M (T - \bar T)(I_u - \bar I_u)}
-            {\sqrt{\sum_M (T - \bar T)^2 \; \sum_M (I_u - \bar I_u)^2}},
-        \quad \sum_M (T - \bar T)(I_u - \bar I_u) = \sum_M (T - \bar T) I_u,
-        \quad \sum_M (I_u - \bar I_u)^2 = \sum_M I_u^2 - \tfrac{1}{n}\big(\sum_M I_u\big)^2,
-
-    with means over the ``n`` mask pixels: three plain correlations (``cv2.TM_CCORR``; the
-    two with the mask in one call, over the window stacked on its square), the same values as
-    ``cv2.matchTemplate(..., TM_CCOEFF_NORMED, mask=M)`` (to ~1e-5) at a third to two thirds
-    of its cost. ``tz`` is :math:`(T - \bar T)` on the mask and 0 off it, ``mf``
-    the mask as 0/1 floats, ``var_t`` :math:`\sum_M (T - \bar T)^2`, ``n`` the number of mask
-    pixels (counted if not given). Flat placements give NaN.
-
-    On the small windows of a gate search the fixed cost of each call dominates, so the
-    arithmetic is done in place on the correlation outputs (a few element-wise operations).
-    """
-    if n is None:
-        n = float(mf.sum())
-    h = window.shape[0]
-    both = np.empty((2 * h, window.shape[1]), np.float32)  # [I ; I²], one correlation for both
-    w = both[:h]
-    np.subtract(window, cv2.mean(window)[0], out=w, casting="unsafe")  # smaller sums below
-    np.multiply(w, w, out=both[h:])
-    num = cv2.matchTemplate(w, tz, cv2.TM_CCORR)  # Σ_M (T − T̄) I_u
-    sums = cv2.matchTemplate(both, mf, cv2.TM_CCORR)  # rows straddling the seam are unused
-    s1, var_i = sums[: h - mf.shape[0] + 1], sums[h:]  # Σ_M I_u, Σ_M I_u²
-    var_i -= s1 * s1 * (1.0 / n)  # Σ_M (I_u − Ī_u)²
-    flat = var_i <= 1e-6 * n
-    np.maximum(var_i, 1e-6 * n, out=var_i)
-    var_i *= var_t
-    num /= np.sqrt(var_i, out=var_i)
-    num[flat] = np.nan
-    return num
 
 
 class TemplateBank:
@@ -247,7 +167,7 @@ class TemplateBank:
         """Forget everything."""
         self._u = np.array([self._SENTINEL], np.int64)
         self._f = self._empty_rows(1)
-        self._templates: dict[int, _Template] = {}
+        self._templates: dict[int, Template] = {}
         self._tick = -1
         self._frame: Image | None = None  # the frame of tick ``_tick``
         self._mask: Image | None = None  # a copy of its foreground mask, if given
@@ -403,7 +323,7 @@ class TemplateBank:
         self._f = self._f[keep]
 
     # ------------------------------------------------------------------------- templates
-    def _cut(self, i: int) -> _Template | None:
+    def _cut(self, i: int) -> Template | None:
         """Grey patch of track row ``i``'s last full-size detected box, from the kept frame."""
         if self._frame is None:
             return None
@@ -417,7 +337,7 @@ class TemplateBank:
         y1 = min(top + max(round(h), 1), height)
         if x1 - x0 < self.min_size or y1 - y0 < self.min_size:
             return None
-        patch = np.ascontiguousarray(_grey(frame[y0:y1, x0:x1]))
+        patch = np.ascontiguousarray(grey(frame[y0:y1, x0:x1]))
         mask = None
         if self._mask is not None:
             mask = cv2.compare(self._mask[y0:y1, x0:x1], 0, cv2.CMP_GT)  # 255 on the object
@@ -427,7 +347,7 @@ class TemplateBank:
         if spread < self.min_std:
             return None
         tick = int(self._f[i, self._TICK])
-        return _Template(patch, mask, (x - x0, y - y0), tick, float(mean))
+        return Template(patch, mask, (x - x0, y - y0), tick, float(mean))
 
     def template(self, uid: int) -> Image | None:
         """The grey patch held for ``uid`` (cut now if it is due), or ``None``."""
@@ -437,7 +357,7 @@ class TemplateBank:
         t = self._current(i)
         return None if t is None else t.patch
 
-    def _current(self, i: int) -> _Template | None:
+    def _current(self, i: int) -> Template | None:
         uid = int(self.uids[i])
         t = self._templates.get(uid)
         tick = int(self._f[i, self._TICK])
@@ -558,7 +478,7 @@ class TemplateBank:
                 continue  # predicted partly outside the image: leaving, not stopped
             x0, y0 = max(tx - ri, 0), max(ty - ri, 0)
             x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
-            window = _grey(frame[y0:y1, x0:x1])
+            window = grey(frame[y0:y1, x0:x1])
             if t.mask is None:
                 ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
             else:  # NCC over the object's pixels only
