@@ -35,22 +35,22 @@ class GateRegions:
         Gate centres ``c``.
     shape : (K, 2, 2)
         Shape matrices ``C`` (NaN where the region is not an ellipse about the centre).
-    r2 : float
-        The gate on the squared distance, the same for every track.
     second_shape : (K, 2, 2) or None
         Shapes of the second association stage's gates around the same centres (None
         without a second stage).
+    r2 : float
+        The gate on the squared distance, the same for every track.
     second_r2 : float or None
-        Its gate on the squared distance.
+        The second stage's gate on the squared distance.
     """
 
     uid: IntArray
     track_id: IntArray
     center: FloatArray
     shape: FloatArray
+    second_shape: FloatArray | None
     r2: float
-    second_shape: FloatArray | None = None
-    second_r2: float | None = None
+    second_r2: float | None
 
     def __len__(self) -> int:
         return int(self.center.shape[0])
@@ -59,7 +59,7 @@ class GateRegions:
         """The gates of rows ``idx`` (indices or a mask)."""
         second = None if self.second_shape is None else self.second_shape[idx]
         return GateRegions(self.uid[idx], self.track_id[idx], self.center[idx],
-                           self.shape[idx], self.r2, second, self.second_r2)
+                           self.shape[idx], second, self.r2, self.second_r2)
 
 
 def axis_shapes(scale: FloatArray | None, k: int) -> FloatArray:

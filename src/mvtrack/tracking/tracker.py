@@ -733,8 +733,8 @@ class Tracker:
                 pred.velocity(ps), self._gate, **params,
             )
         second = None if self._gate2 is None else axis_shapes(f2, n)
-        return GateRegions(tab.uid.copy(), tab.track_id.copy(), np.array(gxy), shape,
-                           self._gate, second, self._gate2)
+        return GateRegions(tab.uid.copy(), tab.track_id.copy(), np.array(gxy), shape, second,
+                           self._gate, self._gate2)
 
 
 def track_detections(
