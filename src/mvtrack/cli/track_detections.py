@@ -155,6 +155,8 @@ def output_policy(config: TrackerConfig, coasting: bool) -> str:
         parts.append("from their first detection (backfill)")
     if config.interpolate:
         parts.append("gaps interpolated")
+    if config.min_track_length:
+        parts.append(f"tracks shorter than {config.min_track_length:g} s left out")
     if config.score_high is not None:
         scale = config.score_scale if isinstance(config.score_scale, str) else "LO,HI"
         parts.append(f"started by detections scored >= {config.score_high:g} ({scale} scale)")

@@ -214,7 +214,7 @@ class TrackerConfig:
     size_gate: float | None = 2.0
     backfill: bool = True
     interpolate: bool = True
-    min_track_length: float | None = None
+    min_track_length: float | None = 0.3
     score_scale: str | tuple[float, float] = "auto"
     score_high: float | None = 0.5
     min_score: float = 0.2
@@ -355,6 +355,7 @@ _PAPER_COMMON: dict[str, Any] = {
     "size_gate": None,
     "score_high": None,
     "min_score": 0.0,
+    "min_track_length": None,
     "warmup": True,
     "warmup_hits": 6,
 }
@@ -424,7 +425,8 @@ def default(fps: float = 30.0) -> TrackerConfig:
     (blobs, simulations) are all high. Offline runs
     (:func:`~mvtrack.tracking.track_detections`) write a confirmed track from its first
     detection on (``backfill``) and the gaps it bridged in full, interpolated
-    (``interpolate``)."""
+    (``interpolate``), and leave out tracks shorter than 0.3 s (``min_track_length``; 0.6 s
+    measured a little better on MOT15 but drops true short tracks of TUD-Campus)."""
     return TrackerConfig(fps=fps)
 
 
