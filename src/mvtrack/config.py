@@ -23,7 +23,7 @@ over the file::
 An unknown table or key is an :class:`~mvtrack.errors.InputError` naming the file and key, so a
 misspelt setting never passes silently. Tracker keys are checked against ``TrackerConfig``'s
 fields, detector and template keys against the constructor of the front end / template bank
-when those are built (:mod:`mvtrack.pipeline`).
+when those are built (:mod:`mvtrack.video.build`).
 """
 
 from __future__ import annotations
@@ -36,9 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from mvtrack.errors import InputError
-
-#: the detector front ends a user may name
-DETECTORS: tuple[str, ...] = ("disturbance-map", "frame-diff", "mog2")
+from mvtrack.registry import DEFAULT_DETECTOR, DETECTORS
 
 _TABLES: dict[str, tuple[str, ...]] = {
     "tracker": (),  # checked against TrackerConfig fields (plus "preset")
@@ -57,7 +55,7 @@ class RunSettings:
     tracker : dict
         ``preset`` (optional) and overrides of ``TrackerConfig`` fields.
     detector : str
-        Front-end name (one of :data:`DETECTORS`).
+        Front-end name (one of :data:`mvtrack.registry.DETECTORS`).
     detector_params : dict
         Keyword arguments of the front end.
     templates : bool
@@ -73,7 +71,7 @@ class RunSettings:
     """
 
     tracker: dict[str, Any] = field(default_factory=dict)
-    detector: str = "disturbance-map"
+    detector: str = DEFAULT_DETECTOR
     detector_params: dict[str, Any] = field(default_factory=dict)
     templates: bool = True
     template_params: dict[str, Any] = field(default_factory=dict)

@@ -88,9 +88,10 @@ def register(app: typer.Typer) -> None:
         """
         from tqdm import tqdm
 
-        from mvtrack.association import ASSIGN_RULES, DISTANCES
+        from mvtrack.association import DISTANCES
         from mvtrack.filters.predictors import PREDICTORS
         from mvtrack.io.mot import read_detections
+        from mvtrack.registry import ASSIGN_RULES
         from mvtrack.tracking import preset as make_preset
         from mvtrack.tracking import track_detections
 

@@ -40,10 +40,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack import _batch
 from mvtrack.association.assign import assign as assign_pairs
 from mvtrack.association.distances import TrackView, get_distance
 from mvtrack.association.gating import candidate_pairs
+from mvtrack.association.regions import SHAPE_PARAMS, GateRegions, axis_shapes, gate_shapes
 from mvtrack.filters.predictors import make_predictor
 from mvtrack.tracking import associate as fast_assoc
 from mvtrack.tracking.config import TrackerConfig
@@ -59,7 +59,7 @@ from mvtrack.tracking.lifecycle import (
 )
 from mvtrack.tracking.log import TrackLog, backfill, drop_short_tracks, interpolate_gaps
 from mvtrack.tracking.scores import ScoreCalibration, duplicates
-from mvtrack.types import Detections, TrackFrame
+from mvtrack.types import Detections, TrackFrame, concat_rows, take_rows
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -86,7 +86,7 @@ class TrackTable:
     """The ``N`` live tracks as a struct of arrays (the predictor state is kept beside it).
 
     The columns are stored in two blocks, one ``int64`` and one ``float64``, so that growing
-    and shrinking the table costs two array operations (``mvtrack._batch.take`` / ``concat``
+    and shrinking the table costs two array operations (``types.take_rows`` / ``concat_rows``
     work on it too); the properties give each column by name.
 
     Attributes
@@ -175,7 +175,7 @@ def _take_state(state: Any, idx: NDArray[np.intp] | slice) -> Any:
         if isinstance(idx, slice):
             return CVState(state.x[idx], state.P[idx])
         return CVState(state.x.take(idx, 0), state.P.take(idx, 0))
-    return _batch.take(state, idx)
+    return take_rows(state, idx)
 
 
 def _kept_rows(delete: BoolArray) -> NDArray[np.intp] | slice:
@@ -220,7 +220,7 @@ def _put_state(state: Any, idx: NDArray[np.intp], new: Any) -> Any:
 def _concat_state(a: Any, b: Any) -> Any:
     if type(a) is CVState:
         return CVState(np.concatenate([a.x, b.x]), np.concatenate([a.P, b.P]))
-    return _batch.concat(a, b)
+    return concat_rows(a, b)
 
 
 def _build_predictor(config: TrackerConfig) -> Any:
@@ -782,6 +782,41 @@ class Tracker:
             return TrackTable(ints, floats), new_ps, born, uid
         tab = TrackTable(np.concatenate([tab.ints, ints]), np.concatenate([tab.floats, floats]))
         return tab, _concat_state(ps, new_ps), born, uid
+
+    def gates(self) -> GateRegions:
+        """The gates the next :meth:`step` applies, one per live track (tentative included).
+
+        The predictor state is advanced one frame (the tracker is not changed). The centre is
+        the prediction, or paper 1's warm-up centre ``2 y_k − y_{k−1}`` while a track has
+        fewer than ``warmup_hits`` associations (SPEC §1.1 [R]). The shape is the configured
+        distance's region (:func:`~mvtrack.association.regions.gate_shapes`); the Euclidean
+        gates of boxes larger than ``size_ref`` are stretched to ``diag(f_x², f_y²)``, and the
+        Mahalanobis disc of the closed-form ``kalman-cv`` is ``(P̄ + r f²) I``, as
+        :meth:`step` applies them. The second stage's gates (``second_gate``) are stretched
+        the same way; the recovery stage is not a gate around the centre and is left out.
+        """
+        tab, pred, n = self.tracks, self.predictor, len(self.tracks)
+        ps = pred.predict(self.pstate)
+        gxy = pred.position(ps)
+        if self._fp.warmup_hits:
+            gxy = self._warmup_centre(tab, gxy, self._k)
+        f2 = None  # as in step: size factors only when a box is larger than size_ref
+        if self._ref is not None and np.count_nonzero(tab.floats[:, WH] > self._ref):
+            f2 = self._size_scale2(tab.floats[:, WH])
+        if self._fast_gate == "euclidean":
+            shape = axis_shapes(f2, n)
+        elif self._fast_gate == "mahalanobis":
+            r = pred.r * self._r_factor(f2) if f2 is not None and self._scale_r else pred.r
+            shape = axis_shapes(pred.position_var(ps) + r, n)  # S = (P̄ + r) I
+        else:
+            params = {k: v for k, v in self._distance_params.items() if k in SHAPE_PARAMS}
+            _, shape, _ = gate_shapes(
+                self.config.distance, gxy, pred.position_cov(ps), pred.innovation_cov(ps),
+                pred.velocity(ps), self._gate, **params,
+            )
+        second = None if self._gate2 is None else axis_shapes(f2, n)
+        return GateRegions(tab.uid.copy(), tab.track_id.copy(), np.array(gxy), shape, second,
+                           self._gate, self._gate2)
 
 
 def track_detections(
