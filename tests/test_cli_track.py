@@ -246,3 +246,14 @@ def test_changing_the_distance_resets_the_gate() -> None:
     assert cfg.distance == "mahalanobis" and cfg.gate in (None, default_gate("mahalanobis"))
     cfg = build_tracker_config(RunSettings(tracker={"distance": "coupled", "gate": 5.0}), 30.0)
     assert cfg.gate == 5.0
+
+
+def test_naming_the_presets_own_distance_changes_nothing() -> None:
+    """``--distance euclidean`` (the default distance, named) keeps the default's 10 px gate."""
+    from mvtrack.tracking import preset
+    from mvtrack.video import build_tracker_config
+
+    named = build_tracker_config(RunSettings(tracker={"distance": "euclidean"}), 30.0)
+    assert named == build_tracker_config(RunSettings(), 30.0) and named.gate == 100.0
+    assert preset("default", fps=30.0, distance="euclidean") == preset("default", fps=30.0)
+    assert preset("default", fps=30.0, distance="iou").gate is None  # another distance: its own

@@ -13,10 +13,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from mvtrack.registry import ASSIGN_RULES
 from mvtrack.tracking.scores import check_scale
-
-#: Assignment rules understood by :func:`mvtrack.association.assign`.
-ASSIGN_RULES = ("nearest", "greedy", "optimal")
 
 
 @dataclass(frozen=True)
@@ -155,7 +153,7 @@ class TrackerConfig:
         consistency that the overlap enforces in IoU association. ``None`` disables it.
         Default 2, for a detector's boxes; the video pipeline turns it off for the
         disturbance map's blobs, which merge and split
-        (:func:`mvtrack.pipeline.resolve_settings`).
+        (:func:`mvtrack.video.resolve_settings`).
     min_track_length : float or None
         Seconds. Offline runs only (:func:`~mvtrack.tracking.track_detections`): a track with
         fewer output rows than this many seconds of frames is left out whole

@@ -38,17 +38,16 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     ``settings.tracker["preset"]`` (default ``"default"``) is built for ``fps``; keys the preset
     function takes as arguments (e.g. ``paper1(predictor=...)``, which then picks the
     predictor's own parameters) are passed to it, the others replace fields of the result.
-    Changing the distance without a gate resets the gate to the new distance's default (a gate
-    is in the distance's units: px² for ``euclidean``, χ² for the others).
+    Changing the distance to another one without a gate resets the gate to the new distance's
+    default (a gate is in the distance's units: px² for ``euclidean``, χ² for the others);
+    naming the preset's own distance changes nothing (:func:`mvtrack.tracking.preset`).
 
     Raises
     ------
     InputError
         Unknown preset or field, or a bad value (one line).
     """
-    import inspect
-
-    from mvtrack.tracking import PRESETS, TrackerConfig
+    from mvtrack.tracking import PRESETS, TrackerConfig, preset
 
     params = dict(settings.tracker)
     name = params.pop("preset", "default")
@@ -60,14 +59,8 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
             raise InputError(
                 f"unknown tracker setting {key!r} (known: {', '.join(sorted(known))})"
             )
-    if "distance" in params and "gate" not in params:
-        params["gate"] = None  # a gate is in the distance's units: use the new one's default
-    build = PRESETS[name]
-    takes = set(inspect.signature(build).parameters) - {"fps"}
-    args = {k: params.pop(k) for k in list(params) if k in takes}
     try:
-        config = build(fps=fps, **args)
-        return config.replace(**params) if params else config
+        return preset(name, fps=fps, **params)  # the one place presets are built
     except (TypeError, ValueError) as exc:
         raise InputError(f"tracker settings: {exc}") from None
 
