@@ -90,6 +90,25 @@ def test_track_with_analytics_table_writes_counts(tmp_path: Path) -> None:
     assert len(counted) == 1 and tracks["crossings"][counted[0]] == "middle:eastbound"
 
 
+def test_track_writes_every_rows_state_and_evidence(tmp_path: Path) -> None:
+    from mvtrack.io.mot import read_tracks
+
+    video = _box_video(tmp_path / "box.avi", n=30)
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--no-video"]) == 0
+    st = read_table(out / "states.csv")
+    res = read_tracks(out / "results.txt", "results")
+    pairs = {(int(f), int(i)) for f, i, s in zip(st["frame"], st["id"], st["state"],
+                                                 strict=True) if s != "coasting"}
+    # results.txt leaves out the coasting rows: every other row has its state in states.csv
+    assert pairs == set(zip((res.frame + 1).tolist(), res.id.tolist(), strict=True))
+    assert len(pairs) == len(res.frame)
+    ok = {("confirmed", "detection"), ("stopped", "template"), ("coasting", "prediction")}
+    assert set(zip(st["state"], st["evidence"], strict=True)) <= ok
+    speed = np.array([float(v) for v in st["speed_px_per_frame"]])
+    assert np.median(speed) > 1.0  # the box moves 2 px/frame
+
+
 def test_track_stops_before_tracking_on_a_bad_analytics_key(tmp_path: Path, capsys) -> None:
     video = _box_video(tmp_path / "box.avi")
     cfg = tmp_path / "scene.toml"
