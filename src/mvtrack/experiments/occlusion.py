@@ -463,9 +463,43 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
         columns=["quantity", "paper", "ours (SPEC §3.3, Q_r = 0.01·Q_c)"],
         rows=rows,
         notes=_notes(n_runs, figures),
-        plots=_plots(first["scene"], first["meas"], per, figures["q_rel_sweep"]),
+        plots={**_plots(first["scene"], first["meas"], per, figures["q_rel_sweep"]),
+               "designs": _designs_plot(figures)},
         variants=variants,
     )
+
+
+def _designs_plot(fig: dict[str, Any]) -> Any:
+    """Maximum leg error of the default and of every variant (bars; grey where the [R]
+    target is missed), beside the independent KFs' and the 7 px mark."""
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    from mvtrack.viz.plots import FAILURE_COLOR, PALETTE
+
+    runs = {"SPEC default": fig, **fig["variants"]}
+    names = list(runs)
+    y = np.arange(len(names))[::-1]
+    mx = [runs[n]["skf_max_err"] for n in names]
+    base = [runs[n]["baseline_max_err"] for n in names]
+    colors = [PALETTE[2] if runs[n]["target_met"] else FAILURE_COLOR for n in names]
+    out = Figure(figsize=(7.5, 0.42 * len(names) + 1.4), layout="constrained")
+    ax = out.subplots()
+    ax.barh(y, mx, color=colors, edgecolor="black", lw=0.6)
+    ax.plot(base, y, "s", color=PALETTE[1], ms=5, label="independent KFs")
+    ax.axvline(TARGET_PX, color="black", ls=":", label="[R] target 7 px")
+    for yi, v in zip(y, mx, strict=True):
+        ax.annotate(f"{v:.2f}", (v, yi), xytext=(3, 0), textcoords="offset points",
+                    va="center", fontsize=7)
+    ax.set_yticks(y, names, fontsize=8)
+    ax.set_xlim(0, 1.12 * max(max(mx), max(base)))
+    ax.set(xlabel="max leg error, k ∈ [115, 140] (px)",
+           title="X9: the default and the other designs, same measurements")
+    handles, _ = ax.get_legend_handles_labels()
+    handles += [Patch(facecolor=PALETTE[2], edgecolor="black", label="target met"),
+                Patch(facecolor=FAILURE_COLOR, edgecolor="black", label="target not met")]
+    ax.legend(handles=handles, fontsize=7, loc="lower right")
+    return out
 
 
 def _notes(n_runs: int, fig: dict) -> str:
