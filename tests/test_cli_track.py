@@ -149,9 +149,9 @@ def test_unknown_detector_and_predictor_are_one_line_errors(tmp_path, capsys) ->
 
 
 def test_ctrl_c_writes_what_was_tracked_and_exits_130(tmp_path, capsys, monkeypatch) -> None:
-    import mvtrack.pipeline as pipeline
+    import mvtrack.video.run as run
 
-    real = pipeline.build_detector
+    real = run.build_detector
 
     def interrupting(settings):
         det = real(settings)
@@ -165,7 +165,7 @@ def test_ctrl_c_writes_what_was_tracked_and_exits_130(tmp_path, capsys, monkeypa
 
         return detect
 
-    monkeypatch.setattr(pipeline, "build_detector", interrupting)
+    monkeypatch.setattr(run, "build_detector", interrupting)
     video = _write_avi(tmp_path / "v.avi")
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out)]) == 130
@@ -220,8 +220,8 @@ def test_snapshot_saves_one_annotated_frame(tmp_path, capsys) -> None:
 def test_preset_arguments_go_to_the_preset(tmp_path) -> None:
     """``--preset paper1 --predictor rls`` builds paper1 for RLS (its own parameters), not the
     Kalman preset with the predictor name swapped."""
-    from mvtrack.pipeline import build_tracker_config
     from mvtrack.tracking import paper1
+    from mvtrack.video import build_tracker_config
 
     cfg = build_tracker_config(RunSettings(tracker={"preset": "paper1", "predictor": "rls",
                                                     "gate": 100.0}), fps=15.0)
@@ -240,7 +240,7 @@ def test_preset_arguments_go_to_the_preset(tmp_path) -> None:
 
 def test_changing_the_distance_resets_the_gate() -> None:
     from mvtrack.association.distances import default_gate
-    from mvtrack.pipeline import build_tracker_config
+    from mvtrack.video import build_tracker_config
 
     cfg = build_tracker_config(RunSettings(tracker={"preset": "paper1",
                                                     "distance": "mahalanobis"}), fps=30.0)

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter
 
-from mvtrack._batch import concat, take
 from mvtrack.filters import kalman
 from mvtrack.filters.base import Predictor
 from mvtrack.filters.structured import (
@@ -21,6 +20,7 @@ from mvtrack.filters.structured import (
     search_region,
     update,
 )
+from mvtrack.types import concat_rows, take_rows
 
 FIG2_EDGES = [(0, 1), (1, 2), (0, 2), (2, 3)]  # relations 12, 23, 13, 34 of Fig. 2
 
@@ -270,7 +270,7 @@ def test_structured_predictor_follows_the_predictor_protocol() -> None:
     T = 40
     truth = np.stack([100 + 2.0 * np.arange(T), 80 + 1.0 * np.arange(T)], axis=1)
     z = truth + rng.normal(0, 1, truth.shape)
-    s = concat(pred.init(z[:1]), pred.init(np.array([[300.0, 300.0]])))
+    s = concat_rows(pred.init(z[:1]), pred.init(np.array([[300.0, 300.0]])))
     ref = _filterpy_bank(pred.params, z[0], 4.0)
     for k in range(1, T):
         s = pred.predict(s)
@@ -282,7 +282,7 @@ def test_structured_predictor_follows_the_predictor_protocol() -> None:
         if k < 30:
             ref.update(z[k])
         np.testing.assert_allclose(pred.velocity(s)[0], ref.x[2:4, 0], atol=1e-9)
-    one = take(s, np.array([1]))
+    one = take_rows(s, np.array([1]))
     np.testing.assert_allclose(pred.position(one)[0], [300.0, 300.0], atol=1e-9)
     cov = pred.position_cov(s)
     assert cov[0, 0, 0] > 2 * cov[1, 0, 0]  # the first track coasted for 10 frames

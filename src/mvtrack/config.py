@@ -30,7 +30,7 @@ With an ``[analytics]`` table, ``mvtrack track`` also writes ``counts.csv``, ``m
 An unknown table or key is an :class:`~mvtrack.errors.InputError` naming the file and key, so a
 misspelt setting never passes silently. Tracker keys are checked against ``TrackerConfig``'s
 fields, detector and template keys against the constructor of the front end / template bank
-when those are built (:mod:`mvtrack.pipeline`).
+when those are built (:mod:`mvtrack.video.build`).
 """
 
 from __future__ import annotations
@@ -43,9 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from mvtrack.errors import InputError
-
-#: the detector front ends a user may name
-DETECTORS: tuple[str, ...] = ("disturbance-map", "frame-diff", "mog2")
+from mvtrack.registry import DEFAULT_DETECTOR, DETECTORS
 
 _TABLES: dict[str, tuple[str, ...]] = {
     "tracker": (),  # checked against TrackerConfig fields (plus "preset")
@@ -65,7 +63,7 @@ class RunSettings:
     tracker : dict
         ``preset`` (optional) and overrides of ``TrackerConfig`` fields.
     detector : str
-        Front-end name (one of :data:`DETECTORS`).
+        Front-end name (one of :data:`mvtrack.registry.DETECTORS`).
     detector_params : dict
         Keyword arguments of the front end.
     templates : bool
@@ -84,7 +82,7 @@ class RunSettings:
     """
 
     tracker: dict[str, Any] = field(default_factory=dict)
-    detector: str = "disturbance-map"
+    detector: str = DEFAULT_DETECTOR
     detector_params: dict[str, Any] = field(default_factory=dict)
     templates: bool = True
     template_params: dict[str, Any] = field(default_factory=dict)

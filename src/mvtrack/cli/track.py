@@ -59,7 +59,7 @@ def register(app: typer.Typer) -> None:
         Ctrl-C stops early and still writes what was tracked (exit status 130).
         """
         from mvtrack.errors import InputError
-        from mvtrack.pipeline import track_video
+        from mvtrack.video import track_video
 
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
@@ -75,7 +75,7 @@ def register(app: typer.Typer) -> None:
         res, summary = run.result, run.summary
         typer.echo(
             f"{summary['frames']} frames, {summary['tracks']} tracks, "
-            f"{summary['fps']} fps; files in {out}"
+            f"{summary['processing_speed']} frames/s processed; files in {out}"
         )
         for path in run.paths.values():
             typer.echo(f"  {path}")

@@ -217,7 +217,7 @@ def _measure(run: SceneRun) -> dict[str, Any]:
         "spurious_causes": _spurious_causes(run),
         "twins": _twins(run),
         "score": _score(run),
-        "ms_per_frame": 1000.0 / max(run.result.fps, 1e-9),
+        "ms_per_frame": 1000.0 / max(run.result.processing_speed, 1e-9),
         "stopped_rows": int((run.log.columns()["state"] == int(TrackState.STOPPED)).sum()),
         "counts": _counts(run),
     }
