@@ -113,7 +113,8 @@ def test_track_writes_all_files(tmp_path, capsys) -> None:
                  "--predictor", "kalman-ca", "--gate", "10px"])
     assert code == 0, capsys.readouterr().err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["results.txt", "summary.json", "tracks.mp4", "trajectories.png"]
+    assert names == ["results.txt", "states.csv", "summary.json", "tracks.mp4",
+                     "trajectories.png"]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["frames"] == 40 and summary["ended_early"] is False
     assert summary["tracker"]["predictor"] == "kalman-ca" and summary["tracker"]["gate"] == 100.0

@@ -405,3 +405,32 @@ def test_tracker_runs_with_the_structured_predictor() -> None:
             ]
         )
         assert np.all(d.min(axis=1) < 3.0) and len(set(d.argmin(axis=1).tolist())) == 1
+
+
+def test_update_order_matters_only_under_occlusion() -> None:
+    from mvtrack.filters.structured import kf_gain, relation_measurement
+
+    graph = PartGraph.chain(3)
+    z0 = np.array([[[0.0, 0.0], [0.0, 20.0], [0.0, 50.0]]])
+    z = np.array([[[2.0, 0.0], [2.0, 20.0], [4.0, 50.0]]])
+    first = SKFParams()
+    cells = SKFParams(order="cells-first")
+    s = predict(first, init(first, graph, z0))
+    # without occlusion (15) blends measurements only: both orders give the same filters
+    a = update(first, graph, s, z, np.zeros((1, 3)))[0]
+    b = update(cells, graph, s, z, np.zeros((1, 3)))[0]
+    np.testing.assert_allclose(a.xr, b.xr)
+    np.testing.assert_allclose(a.xc, b.xc)
+    alpha = np.array([[0.0, 0.0, 0.7]])
+    a, ta = update(first, graph, s, z, alpha)
+    b, tb = update(cells, graph, s, z, alpha)
+    np.testing.assert_allclose(a.xc, b.xc)  # (13) reads priors only
+    # the relation measurement of (15): the cells' priors, or their posteriors
+    np.testing.assert_allclose(ta.relation_z, relation_measurement(graph, z, alpha, s.xc[..., :2]))
+    np.testing.assert_allclose(tb.relation_z, relation_measurement(graph, z, alpha, b.xc[..., :2]))
+    assert not np.allclose(ta.relation_z[0, 1], tb.relation_z[0, 1])
+    K = kf_gain(s.Pr, first.H, first.R_rel)
+    expect = s.xr[0, 1] + K[0, 1] @ (tb.relation_z[0, 1] - s.xr[0, 1, :2])
+    np.testing.assert_allclose(b.xr[0, 1], expect)  # eq. (14) with that measurement
+    with pytest.raises(ValueError, match="order"):
+        SKFParams(order="sideways")  # type: ignore[arg-type]

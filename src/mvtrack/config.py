@@ -1,6 +1,6 @@
 """Settings of a video tracking run, from a TOML file (``--config FILE.toml``) and the CLI.
 
-The file has four optional tables; every key is optional and the command-line options win
+The file has five optional tables; every key is optional and the command-line options win
 over the file::
 
     [tracker]                 # preset, then any field of mvtrack.tracking.TrackerConfig
@@ -19,6 +19,13 @@ over the file::
     write = true
     trail = 30                # frames of trail behind each track
     gates = true              # draw the gate regions
+
+    [analytics]               # counts, movements and speeds (mvtrack.analytics.settings)
+    interval = "15min"        # with sub-tables [analytics.lines.NAME], [analytics.zones.NAME],
+                              # [analytics.approaches.NAME], [analytics.calibration], ...
+
+With an ``[analytics]`` table, ``mvtrack track`` also writes ``counts.csv``, ``movements.csv``,
+``speeds.csv`` and ``tracks.csv`` beside ``results.txt`` (see ``docs/analytics-example.toml``).
 
 An unknown table or key is an :class:`~mvtrack.errors.InputError` naming the file and key, so a
 misspelt setting never passes silently. Tracker keys are checked against ``TrackerConfig``'s
@@ -43,6 +50,7 @@ _TABLES: dict[str, tuple[str, ...]] = {
     "detector": (),  # "name" plus the detector's parameters
     "templates": (),  # "enabled" plus TemplateBank parameters
     "video": ("write", "trail", "gates"),
+    "analytics": (),  # checked by mvtrack.analytics.settings
 }
 
 
@@ -68,6 +76,9 @@ class RunSettings:
         Frames of trail drawn behind each track.
     gates : bool
         Draw the gate regions in the annotated video.
+    analytics : dict or None
+        The ``[analytics]`` table as read (already checked by
+        :func:`mvtrack.analytics.settings.settings_from_dict`); None when the file has none.
     """
 
     tracker: dict[str, Any] = field(default_factory=dict)
@@ -78,6 +89,7 @@ class RunSettings:
     video: bool = True
     trail: int = 30
     gates: bool = True
+    analytics: dict[str, Any] | None = None
 
     def with_overrides(self, **tracker_overrides: Any) -> RunSettings:
         """A copy with the non-None ``tracker_overrides`` (CLI options) applied."""
@@ -176,6 +188,12 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
     if trail < 2:
         raise InputError(f"{path}: video.trail must be at least 2, got {trail}")
 
+    analytics = data.get("analytics")
+    if analytics is not None:
+        from mvtrack.analytics.settings import settings_from_dict
+
+        settings_from_dict(analytics, path)  # every key checked now, before any tracking
+
     return RunSettings(
         tracker=tracker,
         detector=name,
@@ -185,4 +203,5 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
         video=write,
         trail=trail,
         gates=gates,
+        analytics=analytics,
     )
