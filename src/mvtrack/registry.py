@@ -44,6 +44,10 @@ DETECTORS: dict[str, Choice] = {
         "mvtrack.detection.background:FrameDifference",
     ),
     "mog2": Choice("OpenCV's Gaussian mixture model", "mvtrack.detection.background:MOG2"),
+    "scene": Choice(
+        "per-pixel background, shadows, size prior, blobs split with the tracker",
+        "mvtrack.detection.scene:SceneDetector",
+    ),
 }
 
 #: assignment rules (:func:`mvtrack.association.assign`)

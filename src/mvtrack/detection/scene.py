@@ -25,7 +25,7 @@ back and teaching the size prior with the isolated confirmed tracks.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
 
 import cv2
@@ -321,6 +321,50 @@ def isolated(tlwh: FloatArray, margin: float = 0.1) -> NDArray[np.bool_]:
     return ~(inter > 0).any(axis=1)
 
 
+class TrackFeedback:
+    """What a :class:`SceneFrontEnd` takes from the tracker beside it, frame by frame.
+
+    :meth:`observe` after each ``tracker.step``: the detections of the confirmed, isolated
+    tracks that came from plain blobs, move at least ``min_speed`` pixels per frame and have
+    been measured in the last ``min_run`` frames in a row teach the size prior (leaves and
+    flags that flicker in place are not objects); :attr:`predicted` holds the confirmed
+    tracks' boxes for the next frame.
+    """
+
+    def __init__(
+        self, frontend: SceneFrontEnd, *, learn: bool = True, min_speed: float = 1.0,
+        min_run: int = 5,
+    ) -> None:
+        self.frontend = frontend
+        self.learn = bool(learn)
+        self.min_speed = float(min_speed)
+        self.min_run = int(min_run)
+        self.predicted: FloatArray | None = None
+        self._run = np.zeros(1, np.int64)  # consecutive measured frames, by public track ID
+
+    def observe(self, dets: Detections, flags: NDArray[np.int8], tf: TrackFrame) -> None:
+        """Learn from frame ``tf`` (whose detections were ``dets`` with ``flags``)."""
+        if self.learn and len(tf):
+            speed = np.hypot(tf.velocity[:, 0], tf.velocity[:, 1])
+            ids = tf.track_id
+            run = self._run
+            if ids.max() >= len(run):
+                run = np.concatenate([run, np.zeros(2 * int(ids.max()) + 1 - len(run), np.int64)])
+                self._run = run
+            measured = (ids > 0) & (tf.det_index >= 0)
+            prev = run[np.maximum(ids, 0)]
+            run[:] = 0
+            run[ids[measured]] = prev[measured] + 1
+            hit = measured & (speed >= self.min_speed) & (run[np.maximum(ids, 0)] >= self.min_run)
+            rows = tf.det_index[hit]
+            boxes = dets.tlwh[rows] if len(rows) else np.zeros((0, 4))
+            alone = isolated(dets.tlwh)[rows] if len(rows) else np.zeros(0, bool)
+            good = alone & (flags[rows] == PLAIN) if len(rows) else alone
+            if good.any():
+                self.frontend.learn(boxes[good])
+        self.predicted = predicted_boxes(tf)
+
+
 def detect_with_tracker(
     frames: Iterable[Image],
     frontend: SceneFrontEnd,
@@ -333,37 +377,17 @@ def detect_with_tracker(
 ) -> list[Detections]:
     """Run ``frontend`` with ``tracker`` (a :class:`~mvtrack.tracking.Tracker`) over ``frames``.
 
-    Each frame gets the confirmed tracks' predicted boxes; afterwards the detections of the
-    confirmed, isolated tracks that came from plain blobs and move at least ``min_speed``
-    pixels per frame and have been measured in the last ``min_run`` frames in a row (leaves
-    and flags that flicker in place are not objects) teach the size prior. Returns the
+    Each frame gets the confirmed tracks' predicted boxes; afterwards :class:`TrackFeedback`
+    teaches the size prior (``learn``, ``min_speed``, ``min_run`` as there). Returns the
     detections of every frame (feed them to :func:`~mvtrack.tracking.track_detections` for
     an offline run with backfill and interpolation).
     """
     out: list[Detections] = []
-    pred: FloatArray | None = None
-    run = np.zeros(1, np.int64)  # consecutive measured frames, by public track ID
+    feedback = TrackFeedback(frontend, learn=learn, min_speed=min_speed, min_run=min_run)
     for k, frame in enumerate(frames):
-        dets = frontend(frame, k, predicted=pred)
-        flags = frontend.flags
+        dets = frontend(frame, k, predicted=feedback.predicted)
         tf = tracker.step(dets)
-        if learn and len(tf):
-            speed = np.hypot(tf.velocity[:, 0], tf.velocity[:, 1])
-            ids = tf.track_id
-            if ids.max() >= len(run):
-                run = np.concatenate([run, np.zeros(2 * int(ids.max()) + 1 - len(run), np.int64)])
-            measured = (ids > 0) & (tf.det_index >= 0)
-            prev = run[np.maximum(ids, 0)]
-            run[:] = 0
-            run[ids[measured]] = prev[measured] + 1
-            hit = measured & (speed >= min_speed) & (run[np.maximum(ids, 0)] >= min_run)
-            rows = tf.det_index[hit]
-            boxes = dets.tlwh[rows] if len(rows) else np.zeros((0, 4))
-            alone = isolated(dets.tlwh)[rows] if len(rows) else np.zeros(0, bool)
-            good = alone & (flags[rows] == PLAIN) if len(rows) else alone
-            if good.any():
-                frontend.learn(boxes[good])
-        pred = predicted_boxes(tf)
+        feedback.observe(dets, frontend.flags, tf)
         if on_frame is not None:
             on_frame(k, frame, dets, tf)
         out.append(dets)
@@ -388,3 +412,126 @@ def two_pass(
     fe2.prior = prior
     fe2.bootstrap(frames)
     return detect_with_tracker(frames, fe2, make_tracker()), fe2
+
+
+#: how :class:`SceneDetector` starts its background
+BOOTSTRAPS = ("start", "none")
+
+
+class SceneDetector:
+    """The scene front end as a frame loop runs it (``--detector scene``).
+
+    A :class:`SceneFrontEnd` and its :class:`TrackFeedback`, behind the small interface of
+    :func:`mvtrack.video.run_frames`:
+
+    - ``prepare(frames)``: with ``bootstrap="start"`` the first ``bootstrap_frames`` frames are
+      read ahead and the background starts from their temporal median (people in view from the
+      first frame are then not learnt into it); the frames are then given back unchanged, so
+      the loop still sees every frame from the first. ``"none"``: the first frame is the
+      background (it gives no detections);
+    - ``detector(frame) -> Detections`` with the predicted boxes of the tracker's confirmed
+      tracks from the last :meth:`observe`;
+    - ``observe(dets, tracks)`` after each ``tracker.step``: the size prior learns from the
+      isolated, moving, confirmed tracks of plain blobs (:class:`TrackFeedback`);
+    - :attr:`flags` (plain / merged / split of each box of the last frame) and :attr:`mask`
+      (the foreground at the input frame's size, for the stopped-object templates).
+
+    Parameters
+    ----------
+    bootstrap : "start" or "none", default "start"
+    bootstrap_frames : int, default 20
+        Frames read ahead for the median (fewer if the video is shorter).
+    learn : bool, default True
+        Teach the size prior from the tracker's tracks.
+    work_pixels, min_area, close_size, close_frac, trim, split, reject, complete, verify
+        As in :class:`SceneFrontEnd` (``min_area`` and ``close_size`` in working pixels).
+    """
+
+    name = "scene"
+
+    def __init__(
+        self,
+        work_pixels: int = 110_000,
+        *,
+        bootstrap: str = "start",
+        bootstrap_frames: int = 20,
+        learn: bool = True,
+        min_area: float = 30.0,
+        close_size: int = 5,
+        close_frac: float = 0.15,
+        trim: float = 0.2,
+        split: bool = True,
+        reject: bool = True,
+        complete: float | None = 0.85,
+        verify: float | None = None,
+    ) -> None:
+        if bootstrap not in BOOTSTRAPS:
+            raise ValueError(f"bootstrap must be one of {', '.join(BOOTSTRAPS)}, got {bootstrap!r}")
+        if int(bootstrap_frames) < 1:
+            raise ValueError(f"bootstrap_frames must be at least 1, got {bootstrap_frames}")
+        self.frontend = SceneFrontEnd(
+            work_pixels, close_size=close_size, close_frac=close_frac, min_area=min_area,
+            trim=trim, split=split, reject=reject, complete=complete, verify=verify,
+        )
+        self.feedback = TrackFeedback(self.frontend, learn=learn)
+        self.bootstrap = bootstrap
+        self.bootstrap_frames = int(bootstrap_frames)
+        self._shape: tuple[int, int] | None = None
+
+    @property
+    def flags(self) -> NDArray[np.int8]:
+        """Plain / merged / split flag of each box of the last frame."""
+        return self.frontend.flags
+
+    @property
+    def mask(self) -> Image | None:
+        """The cleaned foreground mask of the last frame at the input frame's size."""
+        m = self.frontend.mask
+        if m is None or self._shape is None:
+            return None
+        h, w = self._shape
+        if m.shape == (h, w):
+            return m
+        return cv2.resize(m, (w, h), interpolation=cv2.INTER_NEAREST)
+
+    def prepare(self, frames: Iterable[Image]) -> Iterator[Image]:
+        """``frames`` again, the background bootstrapped from the first of them on the way.
+
+        Lazy: nothing is read before the first frame is asked for. A source that fails during
+        the read-ahead gives the frames read before it, then its error.
+        """
+        it = iter(frames)
+        try:
+            if self.bootstrap == "none":
+                yield from it
+                return
+            head: list[Image] = []
+            error: BaseException | None = None
+            try:
+                for _ in range(self.bootstrap_frames):
+                    head.append(next(it))
+            except StopIteration:
+                pass
+            except (ValueError, OSError) as exc:
+                if not head:
+                    raise
+                error = exc
+            if head:
+                self.frontend.bootstrap(head, max_frames=self.bootstrap_frames)
+            yield from head
+            del head
+            if error is not None:
+                raise error
+            yield from it
+        finally:
+            close = getattr(it, "close", None)
+            if close is not None:
+                close()
+
+    def __call__(self, frame: Image) -> Detections:
+        self._shape = frame.shape[:2]
+        return self.frontend(frame, predicted=self.feedback.predicted)
+
+    def observe(self, dets: Detections, tracks: TrackFrame) -> None:
+        """Teach the prior and keep the predicted boxes for the next frame."""
+        self.feedback.observe(dets, self.frontend.flags, tracks)

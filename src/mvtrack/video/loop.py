@@ -9,6 +9,12 @@
 :func:`run_frames` knows only small interfaces (a detector is a callable
 ``frame -> Detections``, a tracker has ``step(dets, rescue=None) -> TrackFrame``, a rescuer
 gives the ``rescue`` argument and observes the result), so the tests drive it with toy parts.
+A detector may also take part in the tracking (the scene front end,
+:class:`~mvtrack.detection.scene.SceneDetector`): if it has ``prepare(frames) -> frames`` the
+loop reads the video through it (a background bootstrap from the first frames); if it has
+``observe(dets, tracks)`` the loop calls it after each ``tracker.step`` (predicted boxes for
+the next frame, the size prior taught by the tracks); its ``flags`` after each call (plain /
+merged / split of each box) are kept in :attr:`PipelineResult.flags`.
 It shows a tqdm progress bar on stderr when stderr is a terminal, stops cleanly on Ctrl-C
 (``KeyboardInterrupt`` inside the loop ends it with ``interrupted=True``; what was tracked so
 far is returned) and treats a source that fails mid-way the same (``error`` holds the message).
@@ -74,6 +80,10 @@ class PipelineResult:
         Stopped by Ctrl-C.
     error : str or None
         The source failed mid-way with this message; the frames before it are kept.
+    flags : list of (M,) int8
+        Per frame, the blob flag of each detection
+        (:data:`~mvtrack.detection.splitmerge.PLAIN`, ``MERGED`` or ``SPLIT``); all plain
+        for a detector that has no ``flags``.
     """
 
     tracks: list[TrackFrame] = field(default_factory=list)
@@ -82,6 +92,7 @@ class PipelineResult:
     seconds: float = 0.0
     interrupted: bool = False
     error: str | None = None
+    flags: list[NDArray[np.int8]] = field(default_factory=list)
 
     @property
     def ended_early(self) -> bool:
@@ -96,6 +107,13 @@ class PipelineResult:
 
 def _with_frame(dets: Detections, k: int) -> Detections:
     return dets if dets.frame == k else dataclasses.replace(dets, frame=k)
+
+
+def _flags_of(detector: Any, n: int) -> NDArray[np.int8]:
+    flags = getattr(detector, "flags", None)
+    if flags is None or len(flags) != n:
+        return np.zeros(n, np.int8)  # PLAIN
+    return np.array(flags, np.int8)
 
 
 def progress_bar(total: int | None, desc: str, enabled: bool | None = None) -> Any:
@@ -155,7 +173,9 @@ def run_frames(
     result = PipelineResult()
     bar = progress_bar(total, desc, progress)
     t0 = time.perf_counter()
-    iterator: Iterator[Image] = iter(frames)
+    prepare = getattr(detector, "prepare", None)
+    iterator: Iterator[Image] = iter(prepare(frames) if prepare is not None else frames)
+    observe = getattr(detector, "observe", None)
     k = 0
     try:
         while max_frames is None or k < max_frames:
@@ -171,6 +191,9 @@ def run_frames(
             dets = _with_frame(detector(image), k)
             rescue = rescuer.callback(image, dets) if rescuer is not None else None
             tracks = tracker.step(dets, rescue=rescue)
+            if observe is not None:
+                observe(dets, tracks)
+            result.flags.append(_flags_of(detector, len(dets)))
             if rescuer is not None:
                 rescuer.observe(image, dets, tracks)
             result.tracks.append(tracks)

@@ -10,6 +10,9 @@ from mvtrack.config import RunSettings
 #: the image size the papers' pixel parameters refer to (SPEC §1.4: 320×240)
 REFERENCE_SIZE = (320, 240)
 
+#: front ends that size their own blob stage (no size-dependent ``min_area``, ``close_size``)
+OWN_BLOB_STAGE = frozenset({"scene"})
+
 
 def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSettings:
     """Fill in the size-dependent defaults the user left open, for a ``size`` (W, H) video.
@@ -36,13 +39,18 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
 
     The tracker values are only scaled up: images smaller than 320×240 keep them.
 
+    The blob-stage defaults are for the front ends whose blobs are found at the frame's size;
+    the scene front end (``"scene"``) works on a reduced frame and sizes its closing from its
+    size prior, so it keeps its own defaults (:class:`~mvtrack.detection.scene.SceneDetector`).
+
     Values present in ``settings`` are kept; the paper presets are not touched.
     """
     w, h = size
     s2 = (w * h) / (REFERENCE_SIZE[0] * REFERENCE_SIZE[1])
     det = dict(settings.detector_params)
-    det.setdefault("min_area", float(round(40.0 * s2)))
-    det.setdefault("close_size", 7)
+    if settings.detector not in OWN_BLOB_STAGE:
+        det.setdefault("min_area", float(round(40.0 * s2)))
+        det.setdefault("close_size", 7)
     tracker = dict(settings.tracker)
     if tracker.get("preset", "default") == "default":
         # blobs merge and split (two vehicles in one blob, a person in two): a blob's box
