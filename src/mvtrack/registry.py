@@ -31,8 +31,10 @@ class Choice:
     target: str = ""
 
 
-#: the front end used when none is named
-DEFAULT_DETECTOR = "disturbance-map"
+#: the front end used when none is named: the one that measures best on real video
+#: (KITTI-17 from the command line, docs/bench/frontend.md §6); the paper experiments and
+#: ``mvtrack demo`` name paper 1's disturbance map themselves
+DEFAULT_DETECTOR = "scene"
 
 #: detection front ends (:func:`mvtrack.detection.make_detector`)
 DETECTORS: dict[str, Choice] = {

@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -63,21 +64,36 @@ def write_outputs(result: AnalyticsResult, folder: str | os.PathLike[str]) -> di
     return {name: write_table(folder / f"{name}.csv", getattr(result, name)) for name in FILES}
 
 
-def states_table(log: Any) -> Table:
+def states_table(log: Any, flags: Sequence[Any] | None = None) -> Table:
     """One row per public track row of a :class:`~mvtrack.tracking.TrackLog` (``states.csv``):
     ``frame`` (1-based, as in ``results.txt``), ``id``, the tracker's ``state``
     (``confirmed``: updated by a detection; ``stopped``: held by template matching;
     ``coasting``: no measurement, the prediction), the ``evidence`` of the row
-    (``detection``, ``template`` or ``prediction``) and the filter's speed in px/frame."""
+    (``detection``, ``template`` or ``prediction``), the filter's speed in px/frame and
+    ``blob``: for a row updated by a detection, whether its box came from a ``plain`` blob,
+    from fragments ``merged`` into one predicted box or from a blob ``split`` among several
+    tracks (``flags[k][j]`` of detection ``j`` of frame ``k``, as
+    :attr:`mvtrack.video.PipelineResult.flags` keeps them; all ``plain`` without ``flags``);
+    empty for the rows without a detection."""
+    from mvtrack.detection.splitmerge import FLAG_NAMES
     from mvtrack.types import TrackState
 
     c = log.columns()
     keep = c["track_id"] > 0
     st = c["state"][keep]
     names = np.array([s.name.lower() for s in sorted(TrackState)])
+    det = c["det_index"][keep]
     evidence = np.where(st == int(TrackState.STOPPED), "template",
-                        np.where(c["det_index"][keep] >= 0, "detection", "prediction"))
-    frame, tid = c["frame"][keep] + 1, c["track_id"][keep]
+                        np.where(det >= 0, "detection", "prediction"))
+    frame0 = c["frame"][keep]
+    blob = np.full(det.shape, "", dtype=object)
+    for i in np.flatnonzero(det >= 0):
+        f = int(frame0[i])
+        code = 0
+        if flags is not None and f < len(flags) and det[i] < len(flags[f]):
+            code = int(flags[f][det[i]])
+        blob[i] = FLAG_NAMES[code]
+    frame, tid = frame0 + 1, c["track_id"][keep]
     order = np.lexsort((tid, frame))
     return {
         "frame": frame[order],
@@ -85,6 +101,7 @@ def states_table(log: Any) -> Table:
         "state": names[st][order],
         "evidence": evidence[order],
         "speed_px_per_frame": np.linalg.norm(c["velocity"][keep], axis=1)[order],
+        "blob": blob[order],
     }
 
 

@@ -35,7 +35,9 @@ def run_demo(
     scene = x5_intersection(seed)
     if frames is not None:
         scene = scene.truncate(frames)
-    settings = resolve_settings(RunSettings(video=video), scene.size)
+    # paper 1's front end, whatever the default of mvtrack track: the demo is paper 1's system
+    settings = resolve_settings(RunSettings(video=video, detector="disturbance-map"),
+                                scene.size)
     parts = (build_detector(settings), build_tracker(settings, scene.fps))
     run = track_to_folder(
         render_frames(scene, seed), fps=scene.fps, size=scene.size, settings=settings, out=out,

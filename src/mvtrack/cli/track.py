@@ -52,7 +52,8 @@ def register(app: typer.Typer) -> None:
         ] = None,
     ) -> None:
         """Track the moving objects of VIDEO; write results.txt (MOTChallenge), tracks.mp4,
-        trajectories.png, summary.json and states.csv (every row's state and its evidence)
+        trajectories.png, summary.json and states.csv (every row's state, its evidence and
+        whether its box came from a plain, merged or split blob)
         into --out; with an [analytics] table in --config, also counts.csv, movements.csv,
         speeds.csv and tracks.csv.
 
@@ -82,7 +83,7 @@ def register(app: typer.Typer) -> None:
         if run.log is not None:
             from mvtrack.analytics.outputs import states_table, write_table
 
-            typer.echo(f"  {write_table(out / 'states.csv', states_table(run.log))}")
+            typer.echo(f"  {write_table(out / 'states.csv', states_table(run.log, res.flags))}")
         if settings.analytics is not None and res.error is None:
             from mvtrack.analytics import analyse_folder, settings_from_dict
             from mvtrack.analytics.outputs import write_outputs

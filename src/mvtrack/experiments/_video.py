@@ -24,6 +24,10 @@ from mvtrack.sim.scenes import Scene
 from mvtrack.tracking import Tracker, TrackerConfig, TrackLog
 from mvtrack.video import PipelineResult, build_rescuer, resolve_settings, run_frames
 
+#: the front end of the paper experiments (paper 1's disturbance map), named here so that
+#: they keep it whatever the default of ``mvtrack track`` is
+PAPER_DETECTOR = "disturbance-map"
+
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
 
@@ -43,7 +47,7 @@ def track_scene(
     config: TrackerConfig,
     *,
     seed: int,
-    detector: str = "disturbance-map",
+    detector: str = PAPER_DETECTOR,
     detector_params: dict[str, Any] | None = None,
     templates: bool = True,
     frames: list[NDArray[np.uint8]] | None = None,
@@ -62,7 +66,8 @@ def track_scene(
     from mvtrack.sim.render import render_background, render_frames
 
     if detector_params is None:  # the pipeline's defaults for this image size
-        detector_params = resolve_settings(RunSettings(), scene.size).detector_params
+        paper = RunSettings(detector=PAPER_DETECTOR)
+        detector_params = resolve_settings(paper, scene.size).detector_params
     det = make_detector(detector, **detector_params)
     if prime > 0:
         empty = render_background(scene, seed)
@@ -271,7 +276,7 @@ def breaks(frames: IntArray, tracks: IntArray) -> list[tuple[int, int, int]]:
 def pipeline_blob_params(size: tuple[int, int]) -> dict[str, Any]:
     """The blob stage ``mvtrack track`` uses for a video of ``size`` (a 7×7 closing and
     area ≥ 40 px at 320×240), which the specification's experiments run as a variant."""
-    return dict(resolve_settings(RunSettings(), size).detector_params)
+    return dict(resolve_settings(RunSettings(detector=PAPER_DETECTOR), size).detector_params)
 
 
 def prediction_errors(run: SceneRun, obj_id: int, warmup_hits: int = 6) -> dict[str, Any]:
@@ -323,7 +328,8 @@ def default_config(scene: Scene) -> TrackerConfig:
     :func:`mvtrack.video.resolve_settings`)."""
     from mvtrack.video import build_tracker_config
 
-    return build_tracker_config(resolve_settings(RunSettings(), scene.size), scene.fps)
+    paper = RunSettings(detector=PAPER_DETECTOR)
+    return build_tracker_config(resolve_settings(paper, scene.size), scene.fps)
 
 
 def summarise(run: SceneRun, min_assoc: int = 5) -> dict[str, Any]:
