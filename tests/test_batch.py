@@ -99,7 +99,8 @@ def test_parallel_local_cluster_gives_sequential_results(videos, tmp_path) -> No
     # the two scenes differ, so equal files above are not a coincidence of one input
     assert (Path(items[0].out) / "results.txt").read_bytes() != (
         Path(items[2].out) / "results.txt").read_bytes()
-    assert items[0].frames == 40 and items[0].tracks >= 5
+    # (the default front end on the first 40 frames of the nine-vehicle scene)
+    assert items[0].frames == 40 and items[0].tracks >= 3
 
 
 def test_missing_video_is_reported_and_others_complete(videos, tmp_path, scheduler) -> None:

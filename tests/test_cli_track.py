@@ -94,7 +94,7 @@ def test_config_values_are_read(tmp_path) -> None:
     assert s.tracker == {"preset": "paper1", "predictor": "rls", "gate": 100.0}
     assert (s.detector, s.templates, s.video, s.trail) == ("mog2", False, False, 12)
     assert s.with_overrides(gate=None, predictor="kalman-ca").tracker["predictor"] == "kalman-ca"
-    assert RunSettings().detector == "disturbance-map"
+    assert RunSettings().detector == "scene"
 
 
 def test_gate_option_accepts_a_radius_in_pixels() -> None:

@@ -12,6 +12,8 @@ from mvtrack.config import RunSettings
 from mvtrack.types import Detections, TrackFrame
 from mvtrack.video import run_frames, track_to_folder
 
+DM = "disturbance-map"
+
 
 def squares_video(
     n_frames: int = 60, size: tuple[int, int] = (160, 120), noise: float = 2.0, seed: int = 0
@@ -137,7 +139,9 @@ def test_max_frames_and_rescuer_are_honoured() -> None:
 
 
 def _settings(**kw) -> RunSettings:
+    """The disturbance map's pipeline (the squares below are its test scenes)."""
     tracker = {"preset": "default"}
+    kw.setdefault("detector", "disturbance-map")
     return RunSettings(tracker=tracker, templates=False, **kw)
 
 
@@ -312,10 +316,10 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
     from mvtrack.video import resolve_settings
 
     base = TrackerConfig()
-    small = resolve_settings(RunSettings(), (320, 240))
+    small = resolve_settings(RunSettings(detector=DM), (320, 240))
     assert small.detector_params == {"min_area": 40.0, "close_size": 7}
     assert small.tracker == {"measurement_std": 2.0, "size_gate": None}  # blobs: no size gate
-    big = resolve_settings(RunSettings(), (640, 480))  # s² = 4
+    big = resolve_settings(RunSettings(detector=DM), (640, 480))  # s² = 4
     assert big.detector_params["min_area"] == 160.0 and big.detector_params["close_size"] == 7
     assert big.tracker["measurement_std"] == 4.0
     if base.distance == "euclidean" and base.gate is not None:
@@ -323,15 +327,19 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
     if base.second_gate is not None:
         assert big.tracker["second_gate"] == pytest.approx(2 * base.second_gate)
     mine = resolve_settings(
-        RunSettings(tracker={"gate": 50.0, "measurement_std": 1.0},
+        RunSettings(tracker={"gate": 50.0, "measurement_std": 1.0}, detector=DM,
                     detector_params={"min_area": 5.0}), (640, 480))
     assert mine.tracker["gate"] == 50.0 and mine.tracker["measurement_std"] == 1.0
     assert mine.detector_params["min_area"] == 5.0
-    tiny = resolve_settings(RunSettings(), (96, 64))
+    tiny = resolve_settings(RunSettings(detector=DM), (96, 64))
     assert tiny.tracker == {"measurement_std": 2.0, "size_gate": None}
     assert tiny.detector_params["min_area"] == 3.0
     paper = resolve_settings(RunSettings(tracker={"preset": "paper1"}), (640, 480))
     assert paper.tracker == {"preset": "paper1"}
+    # the scene front end sizes its own blob stage (working pixels, closing from its prior);
+    # the tracker's pixel values are scaled as for any front end
+    scene = resolve_settings(RunSettings(detector="scene"), (640, 480))
+    assert scene.detector_params == {} and scene.tracker == big.tracker
 
 
 def test_progress_bar_goes_to_stderr_only_when_asked(capsys) -> None:
@@ -382,7 +390,7 @@ def test_a_stopped_vehicle_keeps_its_id_by_template_matching(tmp_path) -> None:
     frames = _stop_video()
     a_xy, b_xy = (87.5, 44.5), (157.5, 89.5)  # where A stands from frame 40, where B stands
     with_t = track_to_folder(frames, fps=30.0, size=(200, 120), out=tmp_path / "t",
-                             settings=RunSettings(video=False), progress=False)
+                             settings=RunSettings(video=False, detector=DM), progress=False)
     late = range(150, 200)  # long after A's blob has faded into the background
     held = _ids_near(with_t.log, a_xy, late)
     assert len(held) == len(late), "A is lost once it stops"
@@ -396,7 +404,7 @@ def test_a_stopped_vehicle_keeps_its_id_by_template_matching(tmp_path) -> None:
     assert not _ids_near(with_t.log, b_xy, late)
     # without template matching A is lost too
     without = track_to_folder(frames, fps=30.0, size=(200, 120), out=tmp_path / "n",
-                              settings=RunSettings(video=False, templates=False),
+                              settings=RunSettings(video=False, templates=False, detector=DM),
                               progress=False)
     assert not _ids_near(without.log, a_xy, late)
 
