@@ -1,0 +1,79 @@
+"""SIGTERM handled like SIGINT: what ``timeout``, ``docker stop``, systemd and batch schedulers
+send ends a command the way Ctrl-C does, with exit status 143 instead of 130.
+
+Python's default for SIGTERM is to die at once, with no ``finally`` blocks run: no results
+file, no summary, a hidden temporary MP4 left in the output folder. Inside
+:func:`sigterm_as_interrupt` the first SIGTERM raises :class:`Terminated` (a
+``KeyboardInterrupt``) in the main thread instead, so every place that keeps what was done on
+Ctrl-C (the frame loop of ``mvtrack track``, the batch client) keeps it on SIGTERM too. Later
+SIGTERMs are ignored while those files are written.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+from types import FrameType
+
+#: exit status of a command ended by SIGTERM (128 + 15, as a shell reports it)
+EXIT_TERMINATED = 128 + signal.SIGTERM
+#: exit status of a command ended by SIGINT (Ctrl-C)
+EXIT_INTERRUPTED = 128 + signal.SIGINT
+
+
+class Terminated(KeyboardInterrupt):
+    """Raised in the main thread by the first SIGTERM inside :func:`sigterm_as_interrupt`."""
+
+
+_received = threading.Event()
+_reported = threading.Event()
+
+
+def reported() -> None:
+    """Say that the command printed its own ``error: interrupted ...`` line."""
+    _reported.set()
+
+
+def was_reported() -> bool:
+    """Whether the command printed its own line (:func:`reported`) in this block."""
+    return _reported.is_set()
+
+
+def terminated() -> bool:
+    """Whether a SIGTERM arrived inside the current :func:`sigterm_as_interrupt` block."""
+    return _received.is_set()
+
+
+def _on_sigterm(signum: int, frame: FrameType | None) -> None:
+    if _received.is_set():
+        return  # the files of the first one are being written
+    _received.set()
+    raise Terminated
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Inside the block, SIGTERM raises :class:`Terminated` like Ctrl-C raises
+    ``KeyboardInterrupt`` (main thread only; elsewhere the block changes nothing)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _received.clear()
+    _reported.clear()
+    old = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def interrupt_status() -> int:
+    """143 after a SIGTERM, else 130."""
+    return EXIT_TERMINATED if terminated() else EXIT_INTERRUPTED
+
+
+def interrupt_word() -> str:
+    """``terminated`` after a SIGTERM, else ``interrupted``."""
+    return "terminated" if terminated() else "interrupted"
