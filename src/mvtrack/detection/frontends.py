@@ -8,12 +8,14 @@ from typing import Any
 from mvtrack.detection.background import MOG2, DisturbanceMap, FrameDifference
 from mvtrack.detection.base import FrontEnd
 from mvtrack.detection.blobs import BlobExtractor
+from mvtrack.detection.hog import HOGDetector
 
 #: Front-end names accepted by :func:`make_detector`, and their classes.
-DETECTORS: dict[str, type[FrontEnd]] = {
+DETECTORS: dict[str, type[Any]] = {
     "disturbance-map": DisturbanceMap,
     "frame-diff": FrameDifference,
     "mog2": MOG2,
+    "hog": HOGDetector,
 }
 
 
@@ -24,10 +26,13 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
     ----------
     name : str
         ``"disturbance-map"`` (paper 1, the default of the pipeline), ``"frame-diff"`` (the
-        baseline paper 1 rejects) or ``"mog2"`` (OpenCV's mixture model).
+        baseline paper 1 rejects), ``"mog2"`` (OpenCV's mixture model) or ``"hog"``
+        (OpenCV's HOG people detector over the whole frame; no background model).
     **params
         Constructor parameters of the class (see :class:`DisturbanceMap`,
-        :class:`FrameDifference`, :class:`MOG2`); names use underscores (``min_area``).
+        :class:`FrameDifference`, :class:`MOG2`, :class:`~mvtrack.detection.hog.HOGDetector`);
+        names use underscores (``min_area``). The blob stage's parameters
+        (:class:`BlobExtractor`) apply to the background-model front ends only.
 
     Raises
     ------
@@ -43,7 +48,9 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
         ) from None
     known = {
         p.name for p in inspect.signature(cls).parameters.values() if p.kind != p.VAR_KEYWORD
-    } | set(inspect.signature(BlobExtractor).parameters)
+    }
+    if issubclass(cls, FrontEnd):
+        known |= set(inspect.signature(BlobExtractor).parameters)
     unknown = sorted(set(params) - known)
     if unknown:
         raise ValueError(
