@@ -21,8 +21,8 @@ same ``results.txt`` as tracking the videos one after another. The work runs on
 A video that fails (missing, unreadable, a bad frame mid-way) is recorded with its one-line
 error and does not stop the others. ``out_root/batch.json`` (written atomically after every
 finished video) lists per video its status, frames, tracks, processing speed, seconds and error.
-Ctrl-C cancels the pending videos, closes the client and cluster and still writes
-``batch.json`` for what finished.
+Ctrl-C stops the videos being tracked (each writes the results of the frames it tracked),
+cancels the others, closes the client and cluster and still writes ``batch.json``.
 """
 
 from __future__ import annotations
@@ -158,6 +158,7 @@ def track_video(
     *,
     fps: float | None = None,
     max_frames: int | None = None,
+    stop: str | None = None,
 ) -> dict[str, Any]:
     """Track one video into ``out`` exactly as ``mvtrack track`` does; never raises.
 
@@ -177,6 +178,10 @@ def track_video(
         Frame rate to assume instead of the source's.
     max_frames : int, optional
         Stop after this many frames.
+    stop : str, optional
+        Name of a :class:`distributed.Event` (in a Dask task only): once it is set, the frame
+        loop ends as on Ctrl-C and the files of the frames tracked so far are written, so an
+        interrupted batch keeps the partial results of the videos it was tracking.
 
     Returns
     -------
@@ -193,9 +198,12 @@ def track_video(
     t0 = time.perf_counter()
     item = BatchItem(video=video, out=out, status="failed")
     try:
-        run = pipeline.track_video(
-            video, out, settings, fps=fps, max_frames=max_frames, progress=False
-        )
+        if stop is None:
+            run = pipeline.track_video(
+                video, out, settings, fps=fps, max_frames=max_frames, progress=False
+            )
+        else:
+            run = _track_until_stopped(video, out, settings, fps, max_frames, _StopFlag(stop))
     except KeyboardInterrupt:
         item.status, item.error = "cancelled", "interrupted before any frame was tracked"
     except Exception as exc:  # one video's failure must not end the batch
@@ -237,6 +245,50 @@ def _finished_on_disk(item: BatchItem, since: float) -> BatchItem | None:
     return BatchItem(item.video, item.out, "ok", frames=int(summary["frames"]),
                      tracks=int(summary["tracks"]), fps=summary.get("fps"),
                      seconds=float(summary.get("seconds", 0.0)))
+
+
+class _StopFlag:
+    """A :class:`distributed.Event` looked at no more often than every ``every`` seconds."""
+
+    def __init__(self, name: str, every: float = 0.25) -> None:
+        from distributed import Event
+
+        self.event = Event(name)
+        self.every = every
+
+    def is_set(self) -> bool:
+        return bool(self.event.is_set())
+
+    def frames(self, frames: Iterable[Any]) -> Iterator[Any]:
+        """``frames`` until the event is set; then ``KeyboardInterrupt``, which the frame loop
+        takes as Ctrl-C (it writes what was tracked)."""
+        last = time.monotonic()
+        for frame in frames:
+            now = time.monotonic()
+            if now - last >= self.every:
+                last = now
+                if self.is_set():
+                    raise KeyboardInterrupt
+            yield frame
+
+
+def _track_until_stopped(video: str, out: str, settings: RunSettings, fps: float | None,
+                         max_frames: int | None, flag: _StopFlag) -> Any:
+    """:func:`mvtrack.pipeline.track_video` with its frames taken through ``flag``."""
+    from mvtrack import pipeline
+    from mvtrack.io.video import open_source
+
+    if flag.is_set():  # the batch was interrupted before this video started
+        raise KeyboardInterrupt
+    src = open_source(video, fps=fps)
+    with src:
+        resolved = pipeline.resolve_settings(settings, src.size)
+        parts = (pipeline.build_detector(resolved), pipeline.build_tracker(resolved, src.fps))
+        return pipeline.track_to_folder(
+            flag.frames(frame for _, frame in src), fps=src.fps, size=src.size,
+            settings=resolved, out=out, max_frames=max_frames, total=src.frame_count,
+            source=str(video), progress=False, parts=parts, source_error=lambda: src.error,
+        )
 
 
 #: the files :func:`mvtrack.pipeline.track_to_folder` writes (each through a temporary file)
@@ -321,6 +373,7 @@ def track_many(
     progress: bool | None = None,
     on_result: Callable[[BatchItem], None] | None = None,
     timeout: float = 10.0,
+    grace: float = 30.0,
 ) -> list[BatchItem]:
     """Track every video of ``videos`` in parallel, each into ``out_root/<video stem>/``.
 
@@ -349,12 +402,17 @@ def track_many(
     timeout : float
         Seconds to wait for the connection to ``scheduler`` and, if it has none, for a
         worker to join it.
+    grace : float
+        After Ctrl-C, seconds to wait for the videos being tracked to stop and write what
+        they tracked; those still running then are cancelled without results.
 
     Returns
     -------
     list of BatchItem
-        In the order of ``videos``. Ctrl-C (``KeyboardInterrupt`` in this process) cancels the
-        videos not finished, which come back with ``status="cancelled"``; it is not re-raised.
+        In the order of ``videos``. Ctrl-C (``KeyboardInterrupt`` in this process) stops the
+        videos being tracked, which write the results of the frames tracked so far, and
+        cancels the others; both come back with ``status="cancelled"`` (``frames`` says how
+        far each got); it is not re-raised.
 
     Raises
     ------
@@ -413,9 +471,13 @@ def track_many(
             root.mkdir(parents=True, exist_ok=True)
             begun = True
             save()
+            from distributed import Event
+
+            stop_name = f"mvtrack-batch-stop-{os.getpid()}-{time.time_ns()}"
+            stop = Event(stop_name, client=client)
             futures = client.map(
                 track_video, sources, outs, settings=settings, fps=fps, max_frames=max_frames,
-                pure=False,
+                stop=stop_name, pure=False,
             )
             index = {f.key: i for i, f in enumerate(futures)}
             try:
@@ -431,6 +493,13 @@ def track_many(
                         on_result(items[i])
             except KeyboardInterrupt:
                 interrupted = True
+                # the videos being tracked stop at their next frame and write what they
+                # tracked; those not started return at once
+                with contextlib.suppress(Exception):
+                    stop.set()
+                    from distributed import wait
+
+                    wait([f for f in futures if not f.done()], timeout=grace)
                 client.cancel([f for f in futures if not f.done()], force=True)
                 for f in futures:  # keep what finished while we were interrupted
                     i = index[f.key]
