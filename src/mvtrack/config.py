@@ -38,7 +38,7 @@ from typing import Any
 from mvtrack.errors import InputError
 
 #: the detector front ends a user may name
-DETECTORS: tuple[str, ...] = ("disturbance-map", "frame-diff", "mog2", "hog")
+DETECTORS: tuple[str, ...] = ("disturbance-map", "frame-diff", "mog2", "knn", "hog")
 
 _TABLES: dict[str, tuple[str, ...]] = {
     "tracker": (),  # checked against TrackerConfig fields (plus "preset")

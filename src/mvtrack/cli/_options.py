@@ -33,7 +33,7 @@ Distance = Annotated[
 Assign = Annotated[str | None, typer.Option(help="nearest, greedy or optimal.")]
 Gate = Annotated[str | None, typer.Option(help=GATE_HELP)]
 DetectorName = Annotated[
-    str | None, typer.Option(help="disturbance-map (default), frame-diff, mog2, hog")
+    str | None, typer.Option(help="disturbance-map (default), frame-diff, mog2, knn, hog")
 ]
 ConfigFile = Annotated[
     Path | None, typer.Option(help="TOML settings file (see mvtrack.config).")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 from typing import Any
 
-from mvtrack.detection.background import MOG2, DisturbanceMap, FrameDifference
+from mvtrack.detection.background import KNN, MOG2, DisturbanceMap, FrameDifference
 from mvtrack.detection.base import FrontEnd
 from mvtrack.detection.blobs import BlobExtractor
 from mvtrack.detection.hog import HOGDetector
@@ -15,6 +15,7 @@ DETECTORS: dict[str, type[Any]] = {
     "disturbance-map": DisturbanceMap,
     "frame-diff": FrameDifference,
     "mog2": MOG2,
+    "knn": KNN,
     "hog": HOGDetector,
 }
 
@@ -26,11 +27,13 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
     ----------
     name : str
         ``"disturbance-map"`` (paper 1, the default of the pipeline), ``"frame-diff"`` (the
-        baseline paper 1 rejects), ``"mog2"`` (OpenCV's mixture model) or ``"hog"``
-        (OpenCV's HOG people detector over the whole frame; no background model).
+        baseline paper 1 rejects), ``"mog2"`` (OpenCV's mixture model), ``"knn"`` (OpenCV's
+        k-nearest-neighbours subtractor) or ``"hog"`` (OpenCV's HOG people detector over the
+        whole frame; no background model).
     **params
         Constructor parameters of the class (see :class:`DisturbanceMap`,
-        :class:`FrameDifference`, :class:`MOG2`, :class:`~mvtrack.detection.hog.HOGDetector`);
+        :class:`FrameDifference`, :class:`MOG2`, :class:`KNN`,
+        :class:`~mvtrack.detection.hog.HOGDetector`);
         names use underscores (``min_area``). The blob stage's parameters
         (:class:`BlobExtractor`) apply to the background-model front ends only.
 
