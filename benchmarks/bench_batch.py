@@ -1,4 +1,4 @@
-"""Batch speed: many videos through :func:`mvtrack.batch.track_many` with 1 and 2 workers.
+"""Batch speed: many videos through :func:`mvtrack.video.batch.track_many` with 1 and 2 workers.
 
 The input is ``--copies`` copies of one video: by default the rendered nine-vehicle scene
 (X4, 320×240, 240 frames, 30 fps); with ``--source vtest`` the first ``--frames`` frames of
@@ -7,9 +7,9 @@ of ``mvtrack track`` (annotated MP4 included, unless ``--no-video``).
 
 Rows:
 
-* ``sequential`` — :func:`mvtrack.batch.track_video` on each copy in turn in this process, no
+* ``sequential`` — :func:`mvtrack.video.jobs.track_one` on each copy in turn in this process, no
   Dask (the baseline);
-* ``workers = N`` — :func:`~mvtrack.batch.track_many` with a local cluster of N single-thread
+* ``workers = N`` — :func:`~mvtrack.video.batch.track_many` with a local cluster of N single-thread
   worker processes, timed end to end (cluster start, imports in the workers, tracking,
   shutdown);
 * ``fixed cost, workers = N`` — the same with N copies tracked for one frame only: the cost
@@ -49,8 +49,9 @@ from pathlib import Path  # noqa: E402
 
 import cv2  # noqa: E402
 
-from mvtrack.batch import track_many, track_video  # noqa: E402
 from mvtrack.config import RunSettings  # noqa: E402
+from mvtrack.video.batch import track_many  # noqa: E402
+from mvtrack.video.jobs import track_one  # noqa: E402
 
 SHARED_VTEST = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vtest.avi"
 
@@ -159,7 +160,7 @@ def main() -> None:
         if not args.no_sequential:
             def sequential(out: Path) -> None:
                 for i, v in enumerate(videos):
-                    res = track_video(str(v), str(out / f"v{i}"), settings)
+                    res = track_one(str(v), str(out / f"v{i}"), settings)
                     assert res["status"] == "ok", res
 
             timed("sequential", sequential)

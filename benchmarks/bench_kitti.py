@@ -17,7 +17,7 @@ Usage::
 
     python benchmarks/bench_kitti.py                       # every design, Markdown to stdout
     python benchmarks/bench_kitti.py --designs scene-two-pass --json out.json
-    python benchmarks/bench_kitti.py --speed               # front-end fps at 768×576 and 320×240
+    python benchmarks/bench_kitti.py --speed               # front-end speed, 768×576 and 320×240
     python benchmarks/bench_kitti.py --sensitivity         # one default changed at a time
     python benchmarks/bench_kitti.py --results-dir DIR     # also write each design's results
 """
@@ -289,7 +289,8 @@ def speed(repeats: int = 3) -> list[dict]:
                 for k, f in enumerate(frames):
                     fe(f, k)
                 best = min(best, (time.perf_counter() - t) / len(frames))
-            rows.append({"size": label, "front end": name, "ms": 1e3 * best, "fps": 1.0 / best,
+            rows.append({"size": label, "front end": name, "ms": 1e3 * best,
+                         "frames_per_s": 1.0 / best,
                          "decode_ms": 1e3 * decode if label == "768x576" else None})
     return rows
 
@@ -314,11 +315,12 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.speed:
         rows = speed()
-        print("| size | front end | ms / frame | fps | decode ms / frame |")
+        print("| size | front end | ms / frame | frames/s | decode ms / frame |")
         print("|---|---|---:|---:|---:|")
         for r in rows:
             dec = "" if r["decode_ms"] is None else f"{r['decode_ms']:.2f}"
-            print(f"| {r['size']} | {r['front end']} | {r['ms']:.2f} | {r['fps']:.0f} | {dec} |")
+            print(f"| {r['size']} | {r['front end']} | {r['ms']:.2f} "
+                  f"| {r['frames_per_s']:.0f} | {dec} |")
         if args.json:
             args.json.write_text(json.dumps(rows, indent=1))
         return 0

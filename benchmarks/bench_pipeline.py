@@ -10,9 +10,9 @@ Sequences:
   rendered here instead (the table says which).
 
 Stages, each timed over the whole sequence, built exactly as ``mvtrack track --no-video`` builds
-them (:func:`mvtrack.pipeline.resolve_settings` for the video's size, then
-:func:`~mvtrack.pipeline.build_detector`, :func:`~mvtrack.pipeline.build_tracker`,
-:func:`~mvtrack.pipeline.build_rescuer`, run by :func:`~mvtrack.pipeline.run_frames`):
+them (:func:`mvtrack.video.resolve_settings` for the video's size, then
+:func:`~mvtrack.video.build_detector`, :func:`~mvtrack.video.build_tracker`,
+:func:`~mvtrack.video.build_rescuer`, run by :func:`~mvtrack.video.run_frames`):
 ``decode`` (``open_source`` only), ``+ detect`` (decode and the disturbance map with the
 pipeline's size-dependent defaults), ``+ track`` (also the ``default`` tracker preset at the
 source's frame rate, ``templates.enabled = false``) and ``+ track + templates`` (also template
@@ -112,7 +112,7 @@ def run_stage(
 ) -> tuple[int, float, float]:
     """Frames processed, CPU seconds and wall seconds for one pass of ``stage`` over ``video``."""
     from mvtrack.config import RunSettings
-    from mvtrack.pipeline import (
+    from mvtrack.video import (
         build_detector,
         build_rescuer,
         build_tracker,
@@ -196,20 +196,21 @@ def main(argv: list[str] | None = None) -> int:
             med = bench(video, stages, args.repeats, args.detector)
             n = med["frames"][0]
             for s in stages:
-                fps = n / med[s][0]
-                wall_fps = n / med[s][1]
+                speed = n / med[s][0]
+                wall_speed = n / med[s][1]
                 best = n / med[s][2]
                 share = med["decode"][0] / med[s][0]
-                rows.append((desc, size, s, fps, wall_fps, share, best))
+                rows.append((desc, size, s, speed, wall_speed, share, best))
                 target = TARGETS.get(size)
                 mark = (
                     ""
                     if target is None or s == "decode"
-                    else f"  (target ≥ {target:g}: {'met' if fps >= target else 'NOT met'})"
+                    else f"  (target ≥ {target:g}: {'met' if speed >= target else 'NOT met'})"
                 )
                 print(
-                    f"{desc:44s} {s:7s} {fps:7.0f} fps CPU ({1e3 / fps:6.2f} ms/frame; best "
-                    f"{best:5.0f}), {wall_fps:7.0f} fps wall, decode {100 * share:5.1f} %{mark}"
+                    f"{desc:44s} {s:7s} {speed:7.0f} frames/s CPU ({1e3 / speed:6.2f} ms/frame; "
+                    f"best {best:5.0f}), {wall_speed:7.0f} frames/s wall, "
+                    f"decode {100 * share:5.1f} %{mark}"
                 )
     if args.markdown:
         names = {
@@ -220,16 +221,16 @@ def main(argv: list[str] | None = None) -> int:
         }
         print()
         print(
-            "| sequence | stage | fps (CPU, median) | ms/frame (CPU) | fps (CPU, best) "
-            "| fps (wall) | decoding share | target |"
+            "| sequence | stage | frames/s (CPU, median) | ms/frame (CPU) "
+            "| frames/s (CPU, best) | frames/s (wall) | decoding share | target |"
         )
         print("|---|---|---:|---:|---:|---:|---:|---:|")
-        for desc, size, s, fps, wall_fps, share, best in rows:
+        for desc, size, s, speed, wall_speed, share, best in rows:
             target = TARGETS.get(size)
             t = f"≥ {target:g}" if target and s != "decode" else ""
             print(
-                f"| {desc} | {names[s]} | {fps:.0f} | {1e3 / fps:.2f} | {best:.0f} "
-                f"| {wall_fps:.0f} | {100 * share:.0f} % | {t} |"
+                f"| {desc} | {names[s]} | {speed:.0f} | {1e3 / speed:.2f} | {best:.0f} "
+                f"| {wall_speed:.0f} | {100 * share:.0f} % | {t} |"
             )
     return 0
 

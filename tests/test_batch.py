@@ -1,4 +1,4 @@
-"""``mvtrack batch`` / :func:`mvtrack.batch.track_many`: parallel runs give the results of
+"""``mvtrack batch`` / :func:`mvtrack.video.batch.track_many`: parallel runs give the results of
 sequential ``mvtrack track`` runs; failures are per video; batch.json; exit codes; Ctrl-C."""
 
 from __future__ import annotations
@@ -12,12 +12,13 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack.batch import BatchItem, output_names, track_many, track_video
 from mvtrack.cli import main
 from mvtrack.cli.batch import expand_videos
 from mvtrack.config import RunSettings
 from mvtrack.sim.render import write_video
 from mvtrack.sim.scenes import x4_nine_vehicles, x7_crossing
+from mvtrack.video.batch import track_many
+from mvtrack.video.jobs import BatchItem, output_names, track_one
 
 NO_VIDEO = dataclasses.replace(RunSettings(), video=False)
 #: a loopback cluster without dashboard whose HTTP server takes a free port
@@ -60,7 +61,7 @@ def scheduler() -> str:
     """The address of a two-worker local Dask cluster shared by the tests of this module."""
     from distributed import LocalCluster
 
-    from mvtrack.batch import _environ_kept
+    from mvtrack.video.batch import _environ_kept
 
     with _environ_kept():  # the nanny would leave OMP_NUM_THREADS=1 etc. in this process
         cluster = LocalCluster(n_workers=2, threads_per_worker=1, **_QUIET_CLUSTER)
@@ -122,10 +123,10 @@ def test_missing_video_is_reported_and_others_complete(videos, tmp_path, schedul
     assert [v["status"] for v in data["videos"]] == ["ok", "failed", "failed", "ok"]
     assert data["videos"][1]["error"] == items[1].error
     good = data["videos"][3]
-    assert set(good) == {"video", "out", "status", "frames", "tracks", "fps", "seconds",
-                         "error"}
+    assert set(good) == {"video", "out", "status", "frames", "tracks", "processing_speed",
+                         "seconds", "error"}
     assert good["frames"] == 40 and good["tracks"] == items[3].tracks
-    assert good["seconds"] > 0 and good["fps"] > 0
+    assert good["seconds"] > 0 and good["processing_speed"] > 0
     assert good["video"] == str(videos["cam_a"].absolute())
     assert data["settings"]["video"] is False
     assert not (tmp_path / "out" / "nope" / "results.txt").exists()
@@ -206,10 +207,10 @@ def test_ctrl_c_in_a_terminal_stops_workers_and_exits_130(videos, tmp_path) -> N
     assert [p for p in out.rglob(".*") if p.is_file()] == []  # no half-written files
 
 
-def test_track_video_never_raises(tmp_path) -> None:
-    out = track_video(str(tmp_path / "gone.avi"), str(tmp_path / "o"), NO_VIDEO)
+def test_track_one_never_raises(tmp_path) -> None:
+    out = track_one(str(tmp_path / "gone.avi"), str(tmp_path / "o"), NO_VIDEO)
     assert out["status"] == "failed" and "gone.avi" in out["error"]
-    ok = track_video(str(_write_boxes(tmp_path / "v.avi")), str(tmp_path / "o2"), NO_VIDEO,
+    ok = track_one(str(_write_boxes(tmp_path / "v.avi")), str(tmp_path / "o2"), NO_VIDEO,
                      max_frames=12)
     assert ok["status"] == "ok" and ok["frames"] == 12 and ok["error"] is None
 
@@ -292,7 +293,7 @@ def test_unreachable_scheduler_is_one_line_oserror_and_writes_nothing(tmp_path) 
 def test_scheduler_without_workers_is_an_error_not_a_hang(tmp_path) -> None:
     from distributed import LocalCluster
 
-    from mvtrack.batch import _environ_kept
+    from mvtrack.video.batch import _environ_kept
 
     video = _write_boxes(tmp_path / "v.avi", n=8)
     with _environ_kept(), LocalCluster(n_workers=0, **_QUIET_CLUSTER) as empty:

@@ -113,7 +113,8 @@ def test_track_writes_all_files(tmp_path, capsys) -> None:
                  "--predictor", "kalman-ca", "--gate", "10px"])
     assert code == 0, capsys.readouterr().err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["results.txt", "summary.json", "tracks.mp4", "trajectories.png"]
+    assert names == ["results.txt", "states.csv", "summary.json", "tracks.mp4",
+                     "trajectories.png"]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["frames"] == 40 and summary["ended_early"] is False
     assert summary["tracker"]["predictor"] == "kalman-ca" and summary["tracker"]["gate"] == 100.0
@@ -148,9 +149,9 @@ def test_unknown_detector_and_predictor_are_one_line_errors(tmp_path, capsys) ->
 
 
 def test_ctrl_c_writes_what_was_tracked_and_exits_130(tmp_path, capsys, monkeypatch) -> None:
-    import mvtrack.pipeline as pipeline
+    import mvtrack.video.run as run
 
-    real = pipeline.build_detector
+    real = run.build_detector
 
     def interrupting(settings):
         det = real(settings)
@@ -164,7 +165,7 @@ def test_ctrl_c_writes_what_was_tracked_and_exits_130(tmp_path, capsys, monkeypa
 
         return detect
 
-    monkeypatch.setattr(pipeline, "build_detector", interrupting)
+    monkeypatch.setattr(run, "build_detector", interrupting)
     video = _write_avi(tmp_path / "v.avi")
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out)]) == 130
@@ -219,8 +220,8 @@ def test_snapshot_saves_one_annotated_frame(tmp_path, capsys) -> None:
 def test_preset_arguments_go_to_the_preset(tmp_path) -> None:
     """``--preset paper1 --predictor rls`` builds paper1 for RLS (its own parameters), not the
     Kalman preset with the predictor name swapped."""
-    from mvtrack.pipeline import build_tracker_config
     from mvtrack.tracking import paper1
+    from mvtrack.video import build_tracker_config
 
     cfg = build_tracker_config(RunSettings(tracker={"preset": "paper1", "predictor": "rls",
                                                     "gate": 100.0}), fps=15.0)
@@ -239,10 +240,21 @@ def test_preset_arguments_go_to_the_preset(tmp_path) -> None:
 
 def test_changing_the_distance_resets_the_gate() -> None:
     from mvtrack.association.distances import default_gate
-    from mvtrack.pipeline import build_tracker_config
+    from mvtrack.video import build_tracker_config
 
     cfg = build_tracker_config(RunSettings(tracker={"preset": "paper1",
                                                     "distance": "mahalanobis"}), fps=30.0)
     assert cfg.distance == "mahalanobis" and cfg.gate in (None, default_gate("mahalanobis"))
     cfg = build_tracker_config(RunSettings(tracker={"distance": "coupled", "gate": 5.0}), 30.0)
     assert cfg.gate == 5.0
+
+
+def test_naming_the_presets_own_distance_changes_nothing() -> None:
+    """``--distance euclidean`` (the default distance, named) keeps the default's 10 px gate."""
+    from mvtrack.tracking import preset
+    from mvtrack.video import build_tracker_config
+
+    named = build_tracker_config(RunSettings(tracker={"distance": "euclidean"}), 30.0)
+    assert named == build_tracker_config(RunSettings(), 30.0) and named.gate == 100.0
+    assert preset("default", fps=30.0, distance="euclidean") == preset("default", fps=30.0)
+    assert preset("default", fps=30.0, distance="iou").gate is None  # another distance: its own

@@ -17,8 +17,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mvtrack.config import DETECTORS, RunSettings, load_config
+from mvtrack.config import RunSettings, load_config
 from mvtrack.errors import InputError
+from mvtrack.registry import DETECTORS
 from mvtrack.tracking import TrackerConfig
 
 EXAMPLES = int(os.environ.get("MVTRACK_FUZZ_EXAMPLES", "60"))
@@ -107,7 +108,7 @@ valid_settings = st.builds(
     tracker=st.dictionaries(st.sampled_from(TRACKER_FIELDS), scalars, max_size=4).filter(
         lambda d: "gate" not in d or type(d["gate"]) in (int, float)  # a number, not a bool
     ),
-    detector=st.sampled_from(DETECTORS),
+    detector=st.sampled_from(tuple(DETECTORS)),
     detector_params=st.dictionaries(
         st.sampled_from(["threshold", "min_area"]), scalars, max_size=2
     ),

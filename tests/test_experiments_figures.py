@@ -115,6 +115,26 @@ def test_place_labels_never_overlap_and_stay_inside_the_axes() -> None:
         assert not any(a.overlaps(b) for b in boxes[i + 1 :])
 
 
+def test_place_labels_on_an_image_axes_do_not_overlap_once_drawn() -> None:
+    # imshow fixes the aspect: the axes box shrinks when the figure is drawn, and labels
+    # placed in the box before that would move relative to each other
+    fig = Figure(figsize=(8, 4))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.imshow(np.zeros((240, 320)), extent=(0, 320, 240, 0), cmap="gray")
+    rng = np.random.default_rng(0)
+    anchors = np.array([150.0, 80.0]) + rng.normal(0, 6, (30, 2))  # a crowded spot
+    placed = place_labels(ax, anchors, [str(i) for i in range(30)])
+    for dpi in (100, 110):
+        fig.set_dpi(dpi)
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        boxes = [Text.get_window_extent(t, renderer) for t in placed]
+        assert len(boxes) >= 20
+        assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])
+    assert all(t.get_zorder() > 5 for t in placed)  # over the paths (zorder 4–5)
+
+
 def _rows(paths: dict[int, np.ndarray]) -> TrackRows:
     frames = []
     n = max(len(p) for p in paths.values())

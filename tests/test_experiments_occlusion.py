@@ -107,6 +107,21 @@ def test_occlusion_experiment_report(tmp_path, monkeypatch) -> None:
         failed = not sweep[key]["target_met"]
         assert p.get_height() == pytest.approx(sweep[key]["skf_max_err"])
         assert (to_hex(p.get_facecolor()) == FAILURE_COLOR.lower()) == failed
+    # the designs: the specification's options miss the mark, two designs outside it pass
+    v = fig["variants"]
+    assert not v["1/Σ(1 − α^i)"]["target_met"] and not v["inferred from (15)"]["target_met"]
+    assert not v["coasting relation keeps its velocity"]["target_met"]
+    assert v["coasting relation holds its offset"]["skf_max_err"] < fig["skf_max_err"]
+    assert v["cells before relations"]["skf_max_err"] < fig["skf_max_err"]
+    ax = report.plots["designs"].axes[0]
+    hbars = [p for c in ax.containers if hasattr(c, "patches") for p in c.patches]
+    runs = {"SPEC default": fig, **v}
+    at = dict(zip([t.get_text() for t in ax.get_yticklabels()], ax.get_yticks(), strict=True))
+    assert sorted(at, key=at.get, reverse=True) == list(runs)  # the default on top
+    for p, key in zip(hbars, runs, strict=True):
+        assert p.get_width() == pytest.approx(runs[key]["skf_max_err"])
+        assert (to_hex(p.get_facecolor()) == FAILURE_COLOR.lower()) == (
+            not runs[key]["target_met"])
     md = report.markdown()
     assert "Variants:" in md and "*Q_r = Q_c*: the previous default" in md
     paths = write_report(report, tmp_path)

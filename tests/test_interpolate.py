@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mvtrack.tracking.log import interpolate_gaps
+from mvtrack.tracking.log import drop_short_tracks, interpolate_gaps
 from mvtrack.types import TrackFrame, TrackState
 
 C, M, S, T = TrackState.CONFIRMED, TrackState.COASTING, TrackState.STOPPED, TrackState.TENTATIVE
@@ -70,3 +70,39 @@ def test_rows_without_a_public_id_are_left_alone() -> None:
     assert [len(f) for f in out] == [1, 1, 1]
     assert out[1].filtered_xy[0, 0] == 50.0
     assert interpolate_gaps([]) == []
+
+
+def test_drop_short_tracks_leaves_out_whole_short_tracks_only() -> None:
+    # track 1: 3 rows, track 2: 2 rows, a tentative row (-1) in frame 1
+    frames = [
+        _frame(0, [(1, C, 0, 0.0, 10.0), (2, C, 1, 50.0, 10.0)]),
+        _frame(1, [(2, M, -1, 52.0, 10.0), (-1, T, 0, 90.0, 10.0), (1, C, 1, 1.0, 10.0)]),
+        _frame(2, [(1, C, 0, 2.0, 10.0)]),
+    ]
+    out = drop_short_tracks(frames, 3)
+    assert [f.track_id.tolist() for f in out] == [[1], [-1, 1], [1]]
+    np.testing.assert_array_equal(out[1].filtered_xy, [[90.0, 180.0], [1.0, 2.0]])
+    assert [f.track_id.tolist() for f in drop_short_tracks(frames, 2)] == [
+        f.track_id.tolist() for f in frames]
+    assert [len(f) for f in drop_short_tracks(frames, 4)] == [0, 1, 0]
+
+
+def test_min_track_length_in_seconds_scales_with_the_frame_rate() -> None:
+    from mvtrack.tracking import TrackerConfig, track_detections
+    from mvtrack.types import Detections
+
+    def run(fps: float) -> set[int]:
+        # a target seen for 0.5 s and one seen for 2 s, far apart
+        n = round(2 * fps)
+        frames = []
+        for k in range(n):
+            xy = [[100.0 + k, 100.0]] + ([[400.0, 300.0]] if k < n // 4 else [])
+            frames.append(Detections(k, xy, [[20.0, 40.0]] * len(xy)))
+        cfg = TrackerConfig(fps=fps, min_track_length=1.0)
+        return set(track_detections(frames, cfg).track_ids.tolist())
+
+    assert run(10.0) == run(30.0) == {1}
+    n_all = set(track_detections(
+        [Detections(k, [[5.0 * k, 0.0]], [[20.0, 40.0]]) for k in range(6)],
+        TrackerConfig(fps=10.0, min_track_length=None)).track_ids.tolist())
+    assert n_all == {1}

@@ -7,11 +7,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mvtrack._batch import batch_size, concat, take
 from mvtrack.filters import kalman, rls
 from mvtrack.filters.base import Predictor
 from mvtrack.filters.models import constant_acceleration, coupled
 from mvtrack.filters.predictors import PREDICTORS, RLSPredictor, make_predictor
+from mvtrack.types import concat_rows, n_rows, take_rows
 
 
 def _tracks(rng: np.random.Generator, N: int, T: int) -> np.ndarray:
@@ -50,10 +50,10 @@ def test_every_predictor_implements_the_protocol_and_batches(name: str) -> None:
     for t in range(1, 25):
         s_all = p.update(p.predict(s_all), z[t], masks[t - 1])
         s2 = p.update(p.predict(s2), z[t, 2:3], masks[t - 1, 2:3])
-    np.testing.assert_allclose(p.position(take(s_all, np.array([2]))), p.position(s2),
+    np.testing.assert_allclose(p.position(take_rows(s_all, np.array([2]))), p.position(s2),
                                rtol=1e-12)
-    both = concat(s_all, s2)
-    assert batch_size(both) == 7
+    both = concat_rows(s_all, s2)
+    assert n_rows(both) == 7
     np.testing.assert_allclose(p.position(both)[6], p.position(s2)[0])
 
 
@@ -207,11 +207,11 @@ def test_property_shapes_covariances_and_masks(name, N, steps, seed) -> None:
         missing = ~(mask & np.isfinite(z).all(axis=1))
         np.testing.assert_allclose(after[missing], before[missing], rtol=1e-12, atol=1e-9)
         assert np.all(np.isfinite(after)) and np.all(np.isfinite(p.velocity(s)))
-        assert batch_size(s) == N
+        assert n_rows(s) == N
     # take/concat keep rows intact
     if N:
         idx = rng.permutation(N)
-        shuffled = take(s, idx)
+        shuffled = take_rows(s, idx)
         np.testing.assert_array_equal(p.position(shuffled), p.position(s)[idx])
         np.testing.assert_array_equal(p.position(p.predict(shuffled)),
                                       p.position(p.predict(s))[idx])

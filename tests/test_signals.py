@@ -39,9 +39,9 @@ def _write_avi(path: Path, n: int = 60) -> Path:
 def test_sigterm_in_track_writes_what_was_tracked_and_exits_143(tmp_path, capsys,
                                                                 monkeypatch) -> None:
     """The signal arrives in the frame loop (sent by the process to itself at frame 26)."""
-    import mvtrack.pipeline as pipeline
+    import mvtrack.video.run as run
 
-    real = pipeline.build_detector
+    real = run.build_detector
 
     def terminating(settings):
         det = real(settings)
@@ -55,7 +55,7 @@ def test_sigterm_in_track_writes_what_was_tracked_and_exits_143(tmp_path, capsys
 
         return detect
 
-    monkeypatch.setattr(pipeline, "build_detector", terminating)
+    monkeypatch.setattr(run, "build_detector", terminating)
     before = signal.getsignal(signal.SIGTERM)
     video = _write_avi(tmp_path / "v.avi")
     out = tmp_path / "out"
@@ -75,9 +75,9 @@ def test_sigterm_in_track_writes_what_was_tracked_and_exits_143(tmp_path, capsys
 
 def test_ctrl_c_still_exits_130_after_a_sigterm_in_an_earlier_command(tmp_path, capsys,
                                                                        monkeypatch) -> None:
-    import mvtrack.pipeline as pipeline
+    import mvtrack.video.run as run
 
-    real = pipeline.build_detector
+    real = run.build_detector
     send = {"sig": signal.SIGTERM}
 
     def stopping(settings):
@@ -95,7 +95,7 @@ def test_ctrl_c_still_exits_130_after_a_sigterm_in_an_earlier_command(tmp_path, 
 
         return detect
 
-    monkeypatch.setattr(pipeline, "build_detector", stopping)
+    monkeypatch.setattr(run, "build_detector", stopping)
     video = _write_avi(tmp_path / "v.avi")
     assert main(["track", str(video), "--out", str(tmp_path / "a"), "--no-video"]) == 143
     send["sig"] = signal.SIGINT
@@ -231,8 +231,8 @@ def test_interrupted_batch_keeps_the_partial_results_of_the_video_being_tracked(
     """Ctrl-C (KeyboardInterrupt in the client) once a short video is done, while a long one
     is being tracked on the other worker: the long one stops and writes the results, video
     and summary of the frames it tracked."""
-    from mvtrack.batch import track_many
     from mvtrack.config import RunSettings
+    from mvtrack.video.batch import track_many
 
     short = _write_avi(tmp_path / "short.avi", n=20)
     long = _write_avi(tmp_path / "long.avi", n=20000)

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter
 
-from mvtrack._batch import concat, take
 from mvtrack.filters import kalman
 from mvtrack.filters.base import Predictor
 from mvtrack.filters.structured import (
@@ -21,6 +20,7 @@ from mvtrack.filters.structured import (
     search_region,
     update,
 )
+from mvtrack.types import concat_rows, take_rows
 
 FIG2_EDGES = [(0, 1), (1, 2), (0, 2), (2, 3)]  # relations 12, 23, 13, 34 of Fig. 2
 
@@ -270,7 +270,7 @@ def test_structured_predictor_follows_the_predictor_protocol() -> None:
     T = 40
     truth = np.stack([100 + 2.0 * np.arange(T), 80 + 1.0 * np.arange(T)], axis=1)
     z = truth + rng.normal(0, 1, truth.shape)
-    s = concat(pred.init(z[:1]), pred.init(np.array([[300.0, 300.0]])))
+    s = concat_rows(pred.init(z[:1]), pred.init(np.array([[300.0, 300.0]])))
     ref = _filterpy_bank(pred.params, z[0], 4.0)
     for k in range(1, T):
         s = pred.predict(s)
@@ -282,7 +282,7 @@ def test_structured_predictor_follows_the_predictor_protocol() -> None:
         if k < 30:
             ref.update(z[k])
         np.testing.assert_allclose(pred.velocity(s)[0], ref.x[2:4, 0], atol=1e-9)
-    one = take(s, np.array([1]))
+    one = take_rows(s, np.array([1]))
     np.testing.assert_allclose(pred.position(one)[0], [300.0, 300.0], atol=1e-9)
     cov = pred.position_cov(s)
     assert cov[0, 0, 0] > 2 * cov[1, 0, 0]  # the first track coasted for 10 frames
@@ -405,3 +405,32 @@ def test_tracker_runs_with_the_structured_predictor() -> None:
             ]
         )
         assert np.all(d.min(axis=1) < 3.0) and len(set(d.argmin(axis=1).tolist())) == 1
+
+
+def test_update_order_matters_only_under_occlusion() -> None:
+    from mvtrack.filters.structured import kf_gain, relation_measurement
+
+    graph = PartGraph.chain(3)
+    z0 = np.array([[[0.0, 0.0], [0.0, 20.0], [0.0, 50.0]]])
+    z = np.array([[[2.0, 0.0], [2.0, 20.0], [4.0, 50.0]]])
+    first = SKFParams()
+    cells = SKFParams(order="cells-first")
+    s = predict(first, init(first, graph, z0))
+    # without occlusion (15) blends measurements only: both orders give the same filters
+    a = update(first, graph, s, z, np.zeros((1, 3)))[0]
+    b = update(cells, graph, s, z, np.zeros((1, 3)))[0]
+    np.testing.assert_allclose(a.xr, b.xr)
+    np.testing.assert_allclose(a.xc, b.xc)
+    alpha = np.array([[0.0, 0.0, 0.7]])
+    a, ta = update(first, graph, s, z, alpha)
+    b, tb = update(cells, graph, s, z, alpha)
+    np.testing.assert_allclose(a.xc, b.xc)  # (13) reads priors only
+    # the relation measurement of (15): the cells' priors, or their posteriors
+    np.testing.assert_allclose(ta.relation_z, relation_measurement(graph, z, alpha, s.xc[..., :2]))
+    np.testing.assert_allclose(tb.relation_z, relation_measurement(graph, z, alpha, b.xc[..., :2]))
+    assert not np.allclose(ta.relation_z[0, 1], tb.relation_z[0, 1])
+    K = kf_gain(s.Pr, first.H, first.R_rel)
+    expect = s.xr[0, 1] + K[0, 1] @ (tb.relation_z[0, 1] - s.xr[0, 1, :2])
+    np.testing.assert_allclose(b.xr[0, 1], expect)  # eq. (14) with that measurement
+    with pytest.raises(ValueError, match="order"):
+        SKFParams(order="sideways")  # type: ignore[arg-type]

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.detection.template import TemplateBank, TemplateRescuer, gate_radius_of
+from mvtrack.detection.template import TemplateBank
+from mvtrack.video.rescue import TemplateRescuer, gate_radius_of
 
 H, W = 120, 160
 VW, VH = 18, 12  # vehicle box
@@ -322,14 +323,14 @@ def test_gate_radius_follows_a_euclidean_tracker_gate() -> None:
 def test_masked_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None:
     import cv2
 
-    from mvtrack.detection.template import _Template, masked_ncc
+    from mvtrack.detection.ncc import Template, masked_ncc
 
     rng = np.random.default_rng(th)
     win = cv2.GaussianBlur(rng.integers(0, 256, (th + 41, tw + 41), dtype=np.uint8), (5, 5), 0)
     patch = win[7 : 7 + th, 11 : 11 + tw].copy()
     mask = np.zeros_like(patch)
     mask[th // 4 :, tw // 5 :] = 255
-    t = _Template(patch, mask, (0.0, 0.0), 0)
+    t = Template(patch, mask, (0.0, 0.0), 0)
     ours = masked_ncc(win, t.tz, t.mf, t.var_t)
     ref = cv2.matchTemplate(win, patch, cv2.TM_CCOEFF_NORMED, mask=mask)
     np.testing.assert_allclose(ours, ref, atol=2e-4)
@@ -384,7 +385,7 @@ def test_build_rescuer_gives_the_bank_the_detectors_mask_and_min_pixels() -> Non
     pytest.importorskip("mvtrack.tracking.tracker")
     from mvtrack.config import RunSettings
     from mvtrack.detection import DisturbanceMap
-    from mvtrack.pipeline import build_rescuer, build_tracker
+    from mvtrack.video import build_rescuer, build_tracker
 
     tracker = build_tracker(RunSettings(), 30.0)
     dm = DisturbanceMap(min_area=40)

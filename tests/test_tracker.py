@@ -119,7 +119,7 @@ def test_birth_and_death_at_the_right_frames() -> None:
 
 def test_tentative_tracks_are_output_with_id_minus_one_when_asked() -> None:
     a = _line([10.0, 10.0], [1.0, 0.0], 5)
-    config = TrackerConfig(confirm_hits=3, output_tentative=True)
+    config = TrackerConfig(confirm_hits=3, output_tentative=True, min_track_length=None)
     log = track_detections(_frames({0: a}, 5), config)
     assert [tf.track_id.tolist() for tf in log] == [[-1], [-1], [1], [1], [1]]
     assert [int(tf.state[0]) for tf in log] == [0, 0, 1, 1, 1]
@@ -129,7 +129,7 @@ def test_tentative_tracks_are_output_with_id_minus_one_when_asked() -> None:
 def test_confirmation_needs_hits_within_the_window() -> None:
     a = _line([10.0, 10.0], [1.0, 0.0], 12)
     a[1] = a[3] = np.nan  # hits at 0, 2, 4, 5, ...
-    strict_config = TrackerConfig(confirm_hits=3, backfill=False)
+    strict_config = TrackerConfig(confirm_hits=3, backfill=False, min_track_length=None)
     strict = track_detections(_frames({0: a}, 12), strict_config)
     # consecutive hits required: the track born at 0 dies at its first miss, and so on
     assert strict.track_ids.tolist() == [1]
@@ -342,7 +342,8 @@ def test_unknown_names_raise_value_error(changes: dict, word: str) -> None:
 def test_track_detections_fills_skipped_frames_and_rejects_disorder() -> None:
     a = _line([10.0, 10.0], [1.0, 0.0], 6)
     frames = _frames({0: a}, 6)
-    log = track_detections([frames[0], frames[1], frames[2], frames[5]], TrackerConfig())
+    config = TrackerConfig(min_track_length=None)  # a 6-frame track
+    log = track_detections([frames[0], frames[1], frames[2], frames[5]], config)
     assert [tf.frame for tf in log] == [0, 1, 2, 3, 4, 5]
     assert [int(tf.state[0]) for tf in log[2:]] == [1, 2, 2, 1]
     with pytest.raises(ValueError, match="frame 1"):
@@ -406,7 +407,9 @@ def _jump_frames(wh: np.ndarray, jump: np.ndarray) -> list[Detections]:
     ],
 )
 def test_euclidean_gate_stretches_with_the_box_per_axis(wh, jump, size_ref, kept) -> None:
-    config = TrackerConfig(size_ref=size_ref, second_gate=None, recover_speed=None)
+    config = TrackerConfig(
+        size_ref=size_ref, second_gate=None, recover_speed=None, min_track_length=None
+    )
     log = track_detections(_jump_frames(np.array(wh), np.array(jump)), config)
     last = log[6]
     assert (last.track_id.tolist() == [1] and last.det_index.tolist() == [0]) == kept
@@ -434,7 +437,8 @@ def test_size_term_gives_the_small_box_to_the_small_track(weight, small_takes) -
     ]
     last = Detections(5, [[104.0, 100.0], [104.5, 100.0]], [[44.0, 44.0], [20.0, 20.0]])
     config = TrackerConfig(
-        size_weight=weight, second_gate=None, recover_speed=None, size_gate=None
+        size_weight=weight, second_gate=None, recover_speed=None, size_gate=None,
+        min_track_length=None,
     )
     log = track_detections([*still, last], config)
     out = log[5]

@@ -29,8 +29,9 @@ def test_track_detections_writes_results_and_prints_a_summary(tmp_path, capsys) 
     a, _ = _det_file(det)
     out = tmp_path / "res"
     assert main(["track-detections", str(det), "--out", str(out)]) == 0
-    line = capsys.readouterr().out.strip()
-    assert line.count("\n") == 0 and "30 frames, 59 detections -> 2 tracks" in line
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 2 and "30 frames, 59 detections -> 2 tracks" in lines[0]
+    assert lines[1].startswith("rows written: confirmed tracks, coasting rows up to 0.08 s")
     table = read_tracks(out / "seq.txt")
     assert sorted(set(table.id.tolist())) == [1, 2]
     # confirmed on the 2nd frame and written from the 1st (backfill, the default); the

@@ -294,8 +294,8 @@ def test_kept_rows_are_a_slice_only_when_the_last_rows_end() -> None:
 
 
 def test_table_and_state_slices_equal_the_gathered_rows() -> None:
-    from mvtrack import _batch
     from mvtrack.tracking import tracker as tr
+    from mvtrack.types import n_rows
 
     rng = np.random.default_rng(0)
     tab = tr.TrackTable(rng.integers(0, 9, (7, tr.N_INT)), rng.normal(size=(7, tr.N_FLOAT)))
@@ -311,7 +311,7 @@ def test_table_and_state_slices_equal_the_gathered_rows() -> None:
         for name in ("x", "P"):
             if hasattr(state, name):
                 np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
-        assert _batch.batch_size(a) == 4
+        assert n_rows(a) == 4
 
 
 def test_counters_with_a_mask_equal_counters_with_row_indices() -> None:

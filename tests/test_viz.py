@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mvtrack.association.regions import gate_shapes
 from mvtrack.types import TrackFrame, TrackState
 from mvtrack.viz.annotate import (
     GATE_COLOR,
@@ -15,7 +16,6 @@ from mvtrack.viz.annotate import (
     draw_gates,
     ellipse_points,
     gate_ellipses,
-    gate_shapes,
 )
 from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
 

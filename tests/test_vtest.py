@@ -67,7 +67,7 @@ def test_vtest_whole_video(vtest_path, tmp_path) -> None:
     assert 2 <= stats["per_frame"] <= 20, stats
     assert summary["tracks"] == stats["tracks"]
     assert sorted(p.name for p in out.iterdir()) == [
-        "results.txt", "summary.json", "trajectories.png"
+        "results.txt", "states.csv", "summary.json", "trajectories.png"
     ]
 
 

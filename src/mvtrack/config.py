@@ -1,6 +1,6 @@
 """Settings of a video tracking run, from a TOML file (``--config FILE.toml``) and the CLI.
 
-The file has four optional tables; every key is optional and the command-line options win
+The file has five optional tables; every key is optional and the command-line options win
 over the file::
 
     [tracker]                 # preset, then any field of mvtrack.tracking.TrackerConfig
@@ -20,10 +20,17 @@ over the file::
     trail = 30                # frames of trail behind each track
     gates = true              # draw the gate regions
 
+    [analytics]               # counts, movements and speeds (mvtrack.analytics.settings)
+    interval = "15min"        # with sub-tables [analytics.lines.NAME], [analytics.zones.NAME],
+                              # [analytics.approaches.NAME], [analytics.calibration], ...
+
+With an ``[analytics]`` table, ``mvtrack track`` also writes ``counts.csv``, ``movements.csv``,
+``speeds.csv`` and ``tracks.csv`` beside ``results.txt`` (see ``docs/analytics-example.toml``).
+
 An unknown table or key is an :class:`~mvtrack.errors.InputError` naming the file and key, so a
 misspelt setting never passes silently. Tracker keys are checked against ``TrackerConfig``'s
 fields, detector and template keys against the constructor of the front end / template bank
-when those are built (:mod:`mvtrack.pipeline`).
+when those are built (:mod:`mvtrack.video.build`).
 """
 
 from __future__ import annotations
@@ -36,15 +43,14 @@ from pathlib import Path
 from typing import Any
 
 from mvtrack.errors import InputError
-
-#: the detector front ends a user may name
-DETECTORS: tuple[str, ...] = ("disturbance-map", "frame-diff", "mog2", "knn", "hog")
+from mvtrack.registry import DEFAULT_DETECTOR, DETECTORS
 
 _TABLES: dict[str, tuple[str, ...]] = {
     "tracker": (),  # checked against TrackerConfig fields (plus "preset")
     "detector": (),  # "name" plus the detector's parameters
     "templates": (),  # "enabled" plus TemplateBank parameters
     "video": ("write", "trail", "gates"),
+    "analytics": (),  # checked by mvtrack.analytics.settings
 }
 
 
@@ -57,7 +63,7 @@ class RunSettings:
     tracker : dict
         ``preset`` (optional) and overrides of ``TrackerConfig`` fields.
     detector : str
-        Front-end name (one of :data:`DETECTORS`).
+        Front-end name (one of :data:`mvtrack.registry.DETECTORS`).
     detector_params : dict
         Keyword arguments of the front end.
     templates : bool
@@ -70,16 +76,20 @@ class RunSettings:
         Frames of trail drawn behind each track.
     gates : bool
         Draw the gate regions in the annotated video.
+    analytics : dict or None
+        The ``[analytics]`` table as read (already checked by
+        :func:`mvtrack.analytics.settings.settings_from_dict`); None when the file has none.
     """
 
     tracker: dict[str, Any] = field(default_factory=dict)
-    detector: str = "disturbance-map"
+    detector: str = DEFAULT_DETECTOR
     detector_params: dict[str, Any] = field(default_factory=dict)
     templates: bool = True
     template_params: dict[str, Any] = field(default_factory=dict)
     video: bool = True
     trail: int = 30
     gates: bool = True
+    analytics: dict[str, Any] | None = None
 
     def with_overrides(self, **tracker_overrides: Any) -> RunSettings:
         """A copy with the non-None ``tracker_overrides`` (CLI options) applied."""
@@ -178,6 +188,12 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
     if trail < 2:
         raise InputError(f"{path}: video.trail must be at least 2, got {trail}")
 
+    analytics = data.get("analytics")
+    if analytics is not None:
+        from mvtrack.analytics.settings import settings_from_dict
+
+        settings_from_dict(analytics, path)  # every key checked now, before any tracking
+
     return RunSettings(
         tracker=tracker,
         detector=name,
@@ -187,4 +203,5 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
         video=write,
         trail=trail,
         gates=gates,
+        analytics=analytics,
     )

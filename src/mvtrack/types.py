@@ -1,18 +1,26 @@
-"""Frozen containers of arrays that flow between the stages of the pipeline.
+"""Frozen containers of arrays that flow between the stages of the pipeline, and the row
+helpers of batch states.
 
 Conventions: ``M`` detections, ``K`` output rows; image x points right, y down, in pixels.
+
+A *batch state* is a dataclass whose array fields share a leading dimension, one row per
+target (the predictor states of :mod:`mvtrack.filters.predictors`); the tracker grows and
+shrinks it with :func:`take_rows` and :func:`concat_rows`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from enum import IntEnum
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+T = TypeVar("T")
 
 
 class TrackState(IntEnum):
@@ -147,3 +155,39 @@ class TrackFrame:
         z1 = np.zeros(0, dtype=np.int64)
         z2 = np.zeros((0, 2))
         return cls(frame, z1, z1.copy(), z1.copy(), z2, z2.copy(), z2.copy(), z2.copy(), z2.copy())
+
+
+# --------------------------------------------------------------------------- batch states
+
+
+def _is_batched(value: Any) -> bool:
+    return isinstance(value, np.ndarray) and value.ndim >= 1
+
+
+def take_rows(state: T, idx: np.ndarray) -> T:
+    """Rows ``idx`` (int indices or a boolean mask) of every array field of ``state``."""
+    changes = {
+        f.name: getattr(state, f.name)[idx]
+        for f in dataclasses.fields(state)  # type: ignore[arg-type]
+        if _is_batched(getattr(state, f.name))
+    }
+    return dataclasses.replace(state, **changes)  # type: ignore[type-var]
+
+
+def concat_rows(a: T, b: T) -> T:
+    """Rows of ``a`` followed by rows of ``b``; non-array fields are taken from ``a``."""
+    changes = {
+        f.name: np.concatenate([getattr(a, f.name), getattr(b, f.name)])
+        for f in dataclasses.fields(a)  # type: ignore[arg-type]
+        if _is_batched(getattr(a, f.name))
+    }
+    return dataclasses.replace(a, **changes)  # type: ignore[type-var]
+
+
+def n_rows(state: Any) -> int:
+    """Length of the leading dimension of the first array field."""
+    for f in dataclasses.fields(state):
+        value = getattr(state, f.name)
+        if _is_batched(value):
+            return int(value.shape[0])
+    return 0

@@ -222,3 +222,55 @@ def x5_categories(result: Any, wait: float = 2.0) -> dict[str, int]:
         else:
             out[turn] += 1
     return out
+
+
+# ---------------------------------------------------------------------- files with truth
+def line_counts(result: Any) -> dict[str, int]:
+    """``"line:direction"`` → crossings of an :class:`~mvtrack.analytics.run.
+    AnalyticsResult`, over all intervals and classes (each crossing is in the row of its
+    track's class, ``all`` when the tracks carry none)."""
+    t = result.counts
+    out: dict[str, int] = {}
+    for el, name, d, n in zip(t["element"], t["name"], t["direction"], t["count"],
+                              strict=True):
+        if el == "line":
+            out[f"{name}:{d}"] = out.get(f"{name}:{d}", 0) + int(n)
+    return out
+
+
+def evaluate_analytics(gt_path: Any, pred_path: Any, settings: Any, fps: float,
+                       n_frames: int | None = None) -> dict[str, Any]:
+    """Count error per movement and per line direction, and speed RMSE, of a results file
+    against a ground-truth file, both read as tracks and analysed with the same settings.
+
+    The ground truth's counts are those of its own tracks (every object a perfect track), its
+    speeds those of its boxes (the same fit over the same window); ground-truth rows with
+    flag 0 are left out. Track rows are paired with truth rows by :func:`pair_with_truth`.
+    ``speed`` is None without a calibration.
+    """
+    from mvtrack.analytics.run import analyse
+    from mvtrack.io.mot import MotTable, read_tracks
+
+    window = max(1, round(settings.speed.smooth * fps / 2))
+    t = read_tracks(gt_path, "gt")
+    keep = t.conf != 0
+    t = MotTable(t.frame[keep], t.id[keep], t.tlwh[keep], np.ones(int(keep.sum())),
+                 t.cls[keep], t.visibility[keep])
+    gt = TrackPoints.from_mot(t, window=window, drop_tail=False)
+    pred = TrackPoints.from_mot(read_tracks(pred_path, "results"), window=window)
+    last = max([int(p.frame.max()) + 1 for p in (gt, pred) if len(p)], default=1)
+    n = max(n_frames or 0, last)
+    res_gt = analyse(gt, settings, fps, n)
+    res_pred = analyse(pred, settings, fps, n)
+    out: dict[str, Any] = {
+        "fps": fps,
+        "movements": count_errors(movement_counts(res_pred), movement_counts(res_gt)),
+        "lines": count_errors(line_counts(res_pred), line_counts(res_gt)),
+        "speed": None,
+    }
+    if settings.calibration is not None and res_gt.row_speeds is not None \
+            and res_pred.row_speeds is not None:
+        pair = pair_with_truth(pred, gt.frame, gt.track_id, gt.xy, gt.wh)
+        out["speed"] = speed_accuracy(pred, res_pred.row_speeds, pair, res_gt.row_speeds.speed)
+    return out
+

@@ -63,6 +63,31 @@ def write_outputs(result: AnalyticsResult, folder: str | os.PathLike[str]) -> di
     return {name: write_table(folder / f"{name}.csv", getattr(result, name)) for name in FILES}
 
 
+def states_table(log: Any) -> Table:
+    """One row per public track row of a :class:`~mvtrack.tracking.TrackLog` (``states.csv``):
+    ``frame`` (1-based, as in ``results.txt``), ``id``, the tracker's ``state``
+    (``confirmed``: updated by a detection; ``stopped``: held by template matching;
+    ``coasting``: no measurement, the prediction), the ``evidence`` of the row
+    (``detection``, ``template`` or ``prediction``) and the filter's speed in px/frame."""
+    from mvtrack.types import TrackState
+
+    c = log.columns()
+    keep = c["track_id"] > 0
+    st = c["state"][keep]
+    names = np.array([s.name.lower() for s in sorted(TrackState)])
+    evidence = np.where(st == int(TrackState.STOPPED), "template",
+                        np.where(c["det_index"][keep] >= 0, "detection", "prediction"))
+    frame, tid = c["frame"][keep] + 1, c["track_id"][keep]
+    order = np.lexsort((tid, frame))
+    return {
+        "frame": frame[order],
+        "id": tid[order],
+        "state": names[st][order],
+        "evidence": evidence[order],
+        "speed_px_per_frame": np.linalg.norm(c["velocity"][keep], axis=1)[order],
+    }
+
+
 def read_table(path: str | os.PathLike[str]) -> dict[str, list[str]]:
     """A CSV written by :func:`write_table`, as columns of strings."""
     with open(path, newline="", encoding="utf-8") as fh:

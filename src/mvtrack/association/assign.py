@@ -36,10 +36,13 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_array, csr_array
 from scipy.sparse.csgraph import connected_components, min_weight_full_bipartite_matching
 
+from mvtrack import registry
+
 IntArray = NDArray[np.intp]
 FloatArray = NDArray[np.float64]
 
-ASSIGN_RULES = ("nearest", "greedy", "optimal")
+#: the rules by name (:data:`mvtrack.registry.ASSIGN_RULES`)
+ASSIGN_RULES = tuple(registry.ASSIGN_RULES)
 
 #: with solver="auto", more conflicting clusters than this are solved in one sparse problem
 SPARSE_CLUSTERS = 8

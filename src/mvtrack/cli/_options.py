@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from mvtrack.registry import ASSIGN_RULES, DEFAULT_DETECTOR, DETECTORS, one_of
+
 if TYPE_CHECKING:
     from mvtrack.config import RunSettings
 
@@ -30,10 +32,10 @@ Distance = Annotated[
     str | None,
     typer.Option(help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis or iou."),
 ]
-Assign = Annotated[str | None, typer.Option(help="nearest, greedy or optimal.")]
+Assign = Annotated[str | None, typer.Option(help=f"{one_of(ASSIGN_RULES)}.")]
 Gate = Annotated[str | None, typer.Option(help=GATE_HELP)]
 DetectorName = Annotated[
-    str | None, typer.Option(help="disturbance-map (default), frame-diff, mog2, knn, hog")
+    str | None, typer.Option(help=f"{one_of(DETECTORS, DEFAULT_DETECTOR)}.")
 ]
 ConfigFile = Annotated[
     Path | None, typer.Option(help="TOML settings file (see mvtrack.config).")
@@ -85,7 +87,7 @@ def video_settings(
     InputError
         A bad settings file, an unknown detector or a bad gate (one line).
     """
-    from mvtrack.config import DETECTORS, RunSettings, load_config
+    from mvtrack.config import RunSettings, load_config
     from mvtrack.errors import InputError
 
     settings = load_config(config) if config is not None else RunSettings()

@@ -57,7 +57,7 @@ def expand_videos(args: list[str]) -> list[str]:
     ValueError
         No arguments, a glob with no match, or a folder with no videos.
     """
-    from mvtrack.batch import normalise_video
+    from mvtrack.video.jobs import normalise_video
 
     if not args:
         raise ValueError("no videos given")
@@ -135,8 +135,8 @@ def register(app: typer.Typer) -> None:
         stderr), 2 for bad usage, 130 after Ctrl-C and 143 after SIGTERM (pending videos
         are cancelled).
         """
-        from mvtrack.batch import track_many
         from mvtrack.cli import _signals
+        from mvtrack.video.batch import track_many
 
         if workers is not None and workers < 1:
             raise ValueError(f"--workers must be at least 1, got {workers}")
@@ -169,7 +169,8 @@ def register(app: typer.Typer) -> None:
             + f"; summary in {out / 'batch.json'}"
         )
         for it in ok:
-            typer.echo(f"  {it.out}: {it.frames} frames, {it.tracks} tracks, {it.fps} fps")
+            typer.echo(f"  {it.out}: {it.frames} frames, {it.tracks} tracks, "
+                       f"{it.processing_speed} frames/s")
         for it in failed:
             print(f"error: {it.video}: {it.error}", file=sys.stderr)
         if cancelled:

@@ -22,9 +22,9 @@ def run_demo(
     from mvtrack.eval.metrics import evaluate
     from mvtrack.io.atomic import write_json
     from mvtrack.io.mot import MotTable, write_mot
-    from mvtrack.pipeline import build_detector, build_tracker, resolve_settings, track_to_folder
     from mvtrack.sim.render import render_frames
     from mvtrack.sim.scenes import x5_intersection
+    from mvtrack.video import build_detector, build_tracker, resolve_settings, track_to_folder
     from mvtrack.viz.plots import (
         TrackRows,
         save_figure,
@@ -57,7 +57,7 @@ def run_demo(
         "frames": run.result.n_frames,
         "vehicles": len(set(scene.id[scene.visible].tolist())),
         "tracks": run.summary["tracks"],
-        "fps": run.summary["fps"],
+        "processing_speed": run.summary["processing_speed"],
         "seed": seed,
     }
     write_json(out / "metrics.json", figures)
@@ -91,7 +91,7 @@ def register(app: typer.Typer) -> None:
         )
         typer.echo(
             f"  tracks {f['tracks']}   MOTA {f['MOTA']:.3f}   IDF1 {f['IDF1']:.3f}   "
-            f"ID switches {f['IDSW']}   {f['fps']} fps (detect, track, draw)"
+            f"ID switches {f['IDSW']}   {f['processing_speed']} frames/s (detect, track, draw)"
         )
         names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
         typer.echo(f"  files in {out}: {', '.join(names)}")

@@ -94,6 +94,35 @@ def _clean(scores: dict[str, Any]) -> dict[str, Any]:
             for k, v in scores.items()}
 
 
+def format_analytics(acc: dict[str, Any]) -> str:
+    """Count errors per movement and per line direction, and the speed accuracy, as text."""
+    lines = []
+    for title, key in (("movement", "movements"), ("line", "lines")):
+        table = acc[key]
+        keys = [k for k in table if k != "total"]
+        if not keys:
+            continue
+        width = max(len(title), *(len(k) for k in keys))
+        lines.append(f"{title:<{width}}  {'counted':>7}  {'truth':>5}  {'error':>5}")
+        for k in keys:
+            v = table[k]
+            lines.append(f"{k:<{width}}  {v['estimated']:>7}  {v['truth']:>5}  {v['error']:>+5}")
+        tot = table["total"]
+        lines.append(f"{'total':<{width}}  {tot['estimated']:>7}  {tot['truth']:>5}  "
+                     f"|error| {tot['abs_error']}")
+        lines.append("")
+    sp = acc["speed"]
+    if sp is None:
+        lines.append("speed: no calibration in the settings")
+    else:
+        lines.append(f"speed RMSE {_text(sp['rmse_kmh'], '.2f')} km/h over {sp['rows']} paired "
+                     f"rows (bias {_text(sp['bias_kmh'], '+.2f')}, within 2σ "
+                     f"{_text(sp['within_2sigma'], '.2f')}); rows standing still in the truth "
+                     f"read as stopped: {_text(sp['stopped_read_zero'], '.2f')} of "
+                     f"{sp['stopped_rows']}")
+    return "\n".join(lines)
+
+
 def register(app: typer.Typer) -> None:
     """Add the ``eval`` command to ``app``."""
 
@@ -117,6 +146,17 @@ def register(app: typer.Typer) -> None:
         json: Annotated[
             Path | None, typer.Option("--json", help="Also write the scores to this JSON file.")
         ] = None,
+        config: Annotated[
+            Path | None,
+            typer.Option("--config", help="TOML file with an [analytics] table (the one given "
+                         "to mvtrack track): also count error per movement and per line, and "
+                         "speed RMSE, against the ground truth's own tracks."),
+        ] = None,
+        fps: Annotated[
+            float | None,
+            typer.Option(help="Frame rate for --config (default: analytics.fps, else the "
+                         "summary.json beside --pred)."),
+        ] = None,
     ) -> None:
         """MOTA, MOTP, IDF1, ID switches, FP, FN, MT, ML and HOTA of MOTChallenge results.
 
@@ -134,6 +174,15 @@ def register(app: typer.Typer) -> None:
             raise InputError(
                 f"--ignore: unknown value {ignore!r}; choose one of: {', '.join(IGNORE_MODES)}"
             )
+        analytics = None
+        if config is not None:
+            from mvtrack.analytics import load_settings
+
+            analytics = load_settings(config)
+            if gt.is_dir() or pred.is_dir():
+                raise InputError("--config scores one sequence: give --gt and --pred files")
+            if fps is not None and not fps > 0:
+                raise InputError(f"--fps must be positive, got {fps}")
         if gt.is_dir() or pred.is_dir():
             if not (gt.is_dir() and pred.is_dir()):
                 raise InputError("--gt and --pred must both be files or both be folders")
@@ -165,6 +214,21 @@ def register(app: typer.Typer) -> None:
             scores = result.as_dict()
             typer.echo(format_table(scores))
             payload = {"gt": str(gt), "pred": str(pred), **_clean(scores)}
+            if analytics is not None:
+                from mvtrack.analytics.accuracy import evaluate_analytics
+                from mvtrack.analytics.run import folder_info
+
+                rate = fps if fps is not None else analytics.fps
+                if rate is None:
+                    info = folder_info(pred.parent)
+                    rate = info.get("video_fps") or info.get("fps_video")
+                if rate is None:
+                    raise InputError(f"{config}: frame rate unknown: set analytics.fps or "
+                                     "pass --fps")
+                acc = evaluate_analytics(gt, pred, analytics, float(rate))
+                typer.echo("")
+                typer.echo(format_analytics(acc))
+                payload["analytics"] = acc
         if json is not None:
             write_json(json, payload)
             typer.echo(f"wrote {json}")

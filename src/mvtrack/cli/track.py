@@ -52,14 +52,16 @@ def register(app: typer.Typer) -> None:
         ] = None,
     ) -> None:
         """Track the moving objects of VIDEO; write results.txt (MOTChallenge), tracks.mp4,
-        trajectories.png and summary.json into --out.
+        trajectories.png, summary.json and states.csv (every row's state and its evidence)
+        into --out; with an [analytics] table in --config, also counts.csv, movements.csv,
+        speeds.csv and tracks.csv.
 
         Ctrl-C stops early and still writes what was tracked (exit status 130); so does
         SIGTERM (exit status 143).
         """
         from mvtrack.cli import _signals
         from mvtrack.errors import InputError
-        from mvtrack.pipeline import track_video
+        from mvtrack.video import track_video
 
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
@@ -75,10 +77,22 @@ def register(app: typer.Typer) -> None:
         res, summary = run.result, run.summary
         typer.echo(
             f"{summary['frames']} frames, {summary['tracks']} tracks, "
-            f"{summary['fps']} fps; files in {out}"
+            f"{summary['processing_speed']} frames/s processed; files in {out}"
         )
         for path in run.paths.values():
             typer.echo(f"  {path}")
+        if run.log is not None:
+            from mvtrack.analytics.outputs import states_table, write_table
+
+            typer.echo(f"  {write_table(out / 'states.csv', states_table(run.log))}")
+        if settings.analytics is not None and res.error is None:
+            from mvtrack.analytics import analyse_folder, settings_from_dict
+            from mvtrack.analytics.outputs import write_outputs
+
+            result = analyse_folder(out, settings_from_dict(settings.analytics, config or ""),
+                                    fps)
+            for path in write_outputs(result, out).values():
+                typer.echo(f"  {path}")
         if res.interrupted:
             print(
                 f"error: {_signals.interrupt_word()} after {res.n_frames} frames; "

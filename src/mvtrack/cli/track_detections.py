@@ -5,11 +5,14 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from mvtrack.cli._options import Assign, Distance, Gate, Predictor, parse_gate
+
+if TYPE_CHECKING:
+    from mvtrack.tracking import TrackerConfig
 
 
 def results_name(detfile: Path) -> str:
@@ -52,13 +55,43 @@ def register(app: typer.Typer) -> None:
                 show_default=False,
             ),
         ] = None,
+        score_scale: Annotated[
+            str | None,
+            typer.Option(
+                help="How to read the detection scores: auto (rank among the scores so far, "
+                "any detector), prob (probabilities in [0, 1]) or LO,HI (a linear scale). "
+                "Default: the preset's (auto).",
+                show_default=False,
+            ),
+        ] = None,
+        score_high: Annotated[
+            float | None,
+            typer.Option(
+                help="Calibrated score in [0, 1] from which a detection may start a track and "
+                "is matched first; lower ones only extend tracks (default: the preset's).",
+                show_default=False,
+            ),
+        ] = None,
+        min_score: Annotated[
+            float | None,
+            typer.Option(
+                help="Calibrated score in [0, 1] below which detections are dropped "
+                "(default: the preset's).",
+                show_default=False,
+            ),
+        ] = None,
     ) -> None:
-        """Track the detections of DETFILE and write MOTChallenge results into --out."""
+        """Track the detections of DETFILE and write MOTChallenge results into --out.
+
+        Offline: a confirmed track is written from its first detection (--backfill) and the
+        gaps it bridged are interpolated. Scores are ranked among those seen so far (auto).
+        """
         from tqdm import tqdm
 
-        from mvtrack.association import ASSIGN_RULES, DISTANCES
+        from mvtrack.association import DISTANCES
         from mvtrack.filters.predictors import PREDICTORS
         from mvtrack.io.mot import read_detections
+        from mvtrack.registry import ASSIGN_RULES
         from mvtrack.tracking import preset as make_preset
         from mvtrack.tracking import track_detections
 
@@ -72,10 +105,14 @@ def register(app: typer.Typer) -> None:
         }
         if gate is not None:
             changes["gate"] = parse_gate(gate)
-        elif distance is not None:
-            changes["gate"] = None  # the chosen distance's default, not the preset's
         if backfill is not None:
             changes["backfill"] = backfill
+        if score_scale is not None:
+            changes["score_scale"] = parse_score_scale(score_scale)
+        if score_high is not None:
+            changes["score_high"] = score_high
+        if min_score is not None:
+            changes["min_score"] = min_score
         config = make_preset(preset, fps=fps, **changes)
         frames = read_detections(detfile)
         t0 = time.perf_counter()
@@ -91,6 +128,39 @@ def register(app: typer.Typer) -> None:
             f"{len(log.to_mot(coasting))} rows ({config.predictor}, {config.distance}, "
             f"{config.assign}; {ms:.2f} ms/frame) -> {dest}"
         )
+        typer.echo(f"rows written: {output_policy(config, coasting)}")
+
+
+def parse_score_scale(text: str) -> str | tuple[float, float]:
+    """``auto`` / ``prob`` as they are, ``"LO,HI"`` as a pair of numbers."""
+    from mvtrack.tracking.scores import check_scale
+
+    if "," in text:
+        parts = text.split(",")
+        try:
+            pair = tuple(float(v) for v in parts)
+        except ValueError:
+            raise ValueError(f"--score-scale LO,HI needs two numbers, got {text!r}") from None
+        return check_scale(pair)
+    return check_scale(text.strip())
+
+
+def output_policy(config: TrackerConfig, coasting: bool) -> str:
+    """What an offline run of ``config`` writes, in one line."""
+    parts = ["confirmed tracks"]
+    if coasting:
+        tail = config.coast_output
+        parts.append("every coasting row" if tail is None else f"coasting rows up to {tail:g} s")
+    if config.backfill and not config.output_tentative:
+        parts.append("from their first detection (backfill)")
+    if config.interpolate:
+        parts.append("gaps interpolated")
+    if config.min_track_length:
+        parts.append(f"tracks shorter than {config.min_track_length:g} s left out")
+    if config.score_high is not None:
+        scale = config.score_scale if isinstance(config.score_scale, str) else "LO,HI"
+        parts.append(f"started by detections scored >= {config.score_high:g} ({scale} scale)")
+    return ", ".join(parts)
 
 
 def _check_choice(option: str, value: str | None, known: object) -> None:

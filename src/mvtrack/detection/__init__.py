@@ -4,7 +4,7 @@ from mvtrack.detection.background import KNN, MOG2, DisturbanceMap, FrameDiffere
 from mvtrack.detection.base import FrontEnd
 from mvtrack.detection.blobs import BlobExtractor, blobs_from_mask
 from mvtrack.detection.frontends import DETECTORS, make_detector
-from mvtrack.detection.template import TemplateBank, TemplateRescuer
+from mvtrack.detection.template import TemplateBank
 
 __all__ = [
     "DETECTORS",
@@ -15,7 +15,6 @@ __all__ = [
     "FrameDifference",
     "FrontEnd",
     "TemplateBank",
-    "TemplateRescuer",
     "blobs_from_mask",
     "make_detector",
 ]

@@ -5,18 +5,14 @@ from __future__ import annotations
 import inspect
 from typing import Any
 
-from mvtrack.detection.background import KNN, MOG2, DisturbanceMap, FrameDifference
+from mvtrack import registry
 from mvtrack.detection.base import FrontEnd
 from mvtrack.detection.blobs import BlobExtractor
-from mvtrack.detection.hog import HOGDetector
 
-#: Front-end names accepted by :func:`make_detector`, and their classes.
+#: Front-end names accepted by :func:`make_detector` (:data:`mvtrack.registry.DETECTORS`), and
+#: their classes.
 DETECTORS: dict[str, type[Any]] = {
-    "disturbance-map": DisturbanceMap,
-    "frame-diff": FrameDifference,
-    "mog2": MOG2,
-    "knn": KNN,
-    "hog": HOGDetector,
+    name: registry.load(choice) for name, choice in registry.DETECTORS.items()
 }
 
 
@@ -43,12 +39,8 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
         Unknown name (the message lists the known ones), or a parameter the front end does not
         have.
     """
-    try:
-        cls = DETECTORS[name]
-    except KeyError:
-        raise ValueError(
-            f"unknown detector {name!r}; choose one of: {', '.join(DETECTORS)}"
-        ) from None
+    registry.check("detector", name, DETECTORS)
+    cls = DETECTORS[name]
     known = {
         p.name for p in inspect.signature(cls).parameters.values() if p.kind != p.VAR_KEYWORD
     }

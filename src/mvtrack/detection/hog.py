@@ -74,6 +74,10 @@ class HOGDetector:
         """People found in ``frame``; the score is the SVM margin."""
         k = self.frames_seen if index is None else int(index)
         self.frames_seen += 1
+        if frame.shape[0] < WINDOW[1] or frame.shape[1] < WINDOW[0]:
+            # no window fits (the pyramid only shrinks the frame); OpenCV 5.0's
+            # detectMultiScale also corrupts memory on such frames (e.g. 100x200 crashes)
+            return Detections.empty(k)
         rects, weights = self._hog.detectMultiScale(
             frame,
             hitThreshold=self.hit_threshold,

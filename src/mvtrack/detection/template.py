@@ -7,19 +7,19 @@ detection in its gate, the grey patch of its last detected bounding box is searc
 normalised cross-correlation (NCC) within the gate radius of the prediction, and a match with
 NCC ≥ 0.8 holds the track (the tracker puts it in state ``STOPPED``, same ID).
 
-:class:`TemplateBank` keeps one template per track, keyed by the tracker's internal ``uid``:
+:class:`TemplateBank` keeps one template per track, keyed by an integer ``uid`` (the caller's
+identity of the track), and takes arrays in: it knows nothing of the tracker.
 
 * :meth:`TemplateBank.observe` records the detected boxes of this frame's tracks (arrays, no
   per-track work); the grey patch is cut *lazily*, only when a track is first missed, from the
   frame of its last detection (the bank keeps that one frame). A track that is detected again
   gets its template refreshed the same way at its next miss.
 * :meth:`TemplateBank.rescue` matches the missed tracks (few per frame; the only per-track
-  loop, each on a small search window).
+  loop, each on a small search window); :meth:`TemplateBank.bind` wraps it as a
+  ``rescue(uids, predicted_xy, wh) -> (found, xy)`` callback.
 * :meth:`TemplateBank.retain` / :meth:`TemplateBank.drop` forget deleted tracks.
 
-:class:`TemplateRescuer` is the adapter the video pipeline uses: ``callback(frame)`` gives the
-``rescue(uids, predicted_xy, wh) -> (found, xy)`` argument of ``Tracker.step`` and
-``observe(frame, dets, tracks)`` feeds the bank from the step's output.
+The video package connects the bank to the tracker (:mod:`mvtrack.video.rescue`).
 
 Coordinates follow :mod:`mvtrack.detection.blobs`: pixel ``(col, row)`` has centre
 ``(x, y) = (col, row)``; a box of centre ``x`` and width ``w`` covers columns
@@ -30,23 +30,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
 
 import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mvtrack.types import Detections, TrackFrame
+from mvtrack.detection.ncc import Template, grey, masked_ncc
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 Image = NDArray[np.uint8]
 RescueFn = Callable[[IntArray, FloatArray, FloatArray], tuple[BoolArray, FloatArray]]
-
-
-def _grey(img: Image) -> Image:
-    return img if img.ndim == 2 else cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
 
 
 def _member(a: IntArray, b: IntArray) -> BoolArray:
@@ -56,84 +51,6 @@ def _member(a: IntArray, b: IntArray) -> BoolArray:
     b = np.sort(b)
     pos = np.minimum(np.searchsorted(b, a), b.size - 1)
     return b[pos] == a
-
-
-class _Template:
-    """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
-    the observation tick; for a masked template also the terms of :func:`masked_ncc`."""
-
-    __slots__ = ("gate", "mask", "mf", "n", "offset", "patch", "tick", "tz", "var_t")
-
-    def __init__(
-        self,
-        patch: Image,
-        mask: Image | None,
-        offset: tuple[float, float],
-        tick: int,
-        mean: float | None = None,
-    ) -> None:
-        self.patch = patch
-        self.mask = mask
-        self.offset = offset
-        self.tick = tick
-        # the gate mask of the last search and its key (placements' shape, offset of the
-        # first placement's centre from the search centre): a stopped vehicle is searched
-        # around the same place frame after frame, so the mask is usually reused
-        self.gate: tuple[tuple[int, int, float, float, float], Image] | None = None
-        if mask is not None:
-            self.mf = (mask > 0).astype(np.float32)
-            self.n = float(cv2.countNonZero(mask))
-            if mean is None:
-                mean = cv2.mean(patch, mask)[0]
-            self.tz = patch.astype(np.float32)
-            self.tz -= mean
-            self.tz *= self.mf  # T − T̄ on the mask, 0 off it
-            self.var_t = float(cv2.norm(self.tz, cv2.NORM_L2SQR))
-
-
-def masked_ncc(
-    window: Image,
-    tz: NDArray[np.float32],
-    mf: NDArray[np.float32],
-    var_t: float,
-    n: float | None = None,
-) -> NDArray[np.float32]:
-    r"""NCC of a template over its mask pixels ``M`` only, at every placement in ``window``.
-
-    .. math::
-
-        \mathrm{NCC}(u) = \frac{\sum_M (T - \bar T)(I_u - \bar I_u)}
-            {\sqrt{\sum_M (T - \bar T)^2 \; \sum_M (I_u - \bar I_u)^2}},
-        \quad \sum_M (T - \bar T)(I_u - \bar I_u) = \sum_M (T - \bar T) I_u,
-        \quad \sum_M (I_u - \bar I_u)^2 = \sum_M I_u^2 - \tfrac{1}{n}\big(\sum_M I_u\big)^2,
-
-    with means over the ``n`` mask pixels: three plain correlations (``cv2.TM_CCORR``; the
-    two with the mask in one call, over the window stacked on its square), the same values as
-    ``cv2.matchTemplate(..., TM_CCOEFF_NORMED, mask=M)`` (to ~1e-5) at a third to two thirds
-    of its cost. ``tz`` is :math:`(T - \bar T)` on the mask and 0 off it, ``mf``
-    the mask as 0/1 floats, ``var_t`` :math:`\sum_M (T - \bar T)^2`, ``n`` the number of mask
-    pixels (counted if not given). Flat placements give NaN.
-
-    On the small windows of a gate search the fixed cost of each call dominates, so the
-    arithmetic is done in place on the correlation outputs (a few element-wise operations).
-    """
-    if n is None:
-        n = float(mf.sum())
-    h = window.shape[0]
-    both = np.empty((2 * h, window.shape[1]), np.float32)  # [I ; I²], one correlation for both
-    w = both[:h]
-    np.subtract(window, cv2.mean(window)[0], out=w, casting="unsafe")  # smaller sums below
-    np.multiply(w, w, out=both[h:])
-    num = cv2.matchTemplate(w, tz, cv2.TM_CCORR)  # Σ_M (T − T̄) I_u
-    sums = cv2.matchTemplate(both, mf, cv2.TM_CCORR)  # rows straddling the seam are unused
-    s1, var_i = sums[: h - mf.shape[0] + 1], sums[h:]  # Σ_M I_u, Σ_M I_u²
-    var_i -= s1 * s1 * (1.0 / n)  # Σ_M (I_u − Ī_u)²
-    flat = var_i <= 1e-6 * n
-    np.maximum(var_i, 1e-6 * n, out=var_i)
-    var_i *= var_t
-    num /= np.sqrt(var_i, out=var_i)
-    num[flat] = np.nan
-    return num
 
 
 class TemplateBank:
@@ -250,7 +167,7 @@ class TemplateBank:
         """Forget everything."""
         self._u = np.array([self._SENTINEL], np.int64)
         self._f = self._empty_rows(1)
-        self._templates: dict[int, _Template] = {}
+        self._templates: dict[int, Template] = {}
         self._tick = -1
         self._frame: Image | None = None  # the frame of tick ``_tick``
         self._mask: Image | None = None  # a copy of its foreground mask, if given
@@ -406,7 +323,7 @@ class TemplateBank:
         self._f = self._f[keep]
 
     # ------------------------------------------------------------------------- templates
-    def _cut(self, i: int) -> _Template | None:
+    def _cut(self, i: int) -> Template | None:
         """Grey patch of track row ``i``'s last full-size detected box, from the kept frame."""
         if self._frame is None:
             return None
@@ -420,7 +337,7 @@ class TemplateBank:
         y1 = min(top + max(round(h), 1), height)
         if x1 - x0 < self.min_size or y1 - y0 < self.min_size:
             return None
-        patch = np.ascontiguousarray(_grey(frame[y0:y1, x0:x1]))
+        patch = np.ascontiguousarray(grey(frame[y0:y1, x0:x1]))
         mask = None
         if self._mask is not None:
             mask = cv2.compare(self._mask[y0:y1, x0:x1], 0, cv2.CMP_GT)  # 255 on the object
@@ -430,7 +347,7 @@ class TemplateBank:
         if spread < self.min_std:
             return None
         tick = int(self._f[i, self._TICK])
-        return _Template(patch, mask, (x - x0, y - y0), tick, float(mean))
+        return Template(patch, mask, (x - x0, y - y0), tick, float(mean))
 
     def template(self, uid: int) -> Image | None:
         """The grey patch held for ``uid`` (cut now if it is due), or ``None``."""
@@ -440,7 +357,7 @@ class TemplateBank:
         t = self._current(i)
         return None if t is None else t.patch
 
-    def _current(self, i: int) -> _Template | None:
+    def _current(self, i: int) -> Template | None:
         uid = int(self.uids[i])
         t = self._templates.get(uid)
         tick = int(self._f[i, self._TICK])
@@ -561,7 +478,7 @@ class TemplateBank:
                 continue  # predicted partly outside the image: leaving, not stopped
             x0, y0 = max(tx - ri, 0), max(ty - ri, 0)
             x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
-            window = _grey(frame[y0:y1, x0:x1])
+            window = grey(frame[y0:y1, x0:x1])
             if t.mask is None:
                 ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
             else:  # NCC over the object's pixels only
@@ -587,7 +504,7 @@ class TemplateBank:
         return found, out, score
 
     def bind(self, frame: Image, gate_radius: float | None = None) -> RescueFn:
-        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for ``Tracker.step`` on ``frame``."""
+        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` on ``frame`` (a tracker's callback)."""
 
         def rescue(
             uids: IntArray, predicted_xy: FloatArray, wh: FloatArray
@@ -596,125 +513,3 @@ class TemplateBank:
             return found, xy
 
         return rescue
-
-
-def gate_radius_of(tracker: Any, default: float) -> float:
-    """The tracker's gate as a radius in px when its distance is Euclidean, else ``default``.
-
-    Mahalanobis-type and IoU gates have no single radius in pixels; there the bank's own
-    ``gate_radius`` (paper 1's 20 px) is used.
-    """
-    config = getattr(tracker, "config", None)
-    gate = getattr(tracker, "_gate", None)
-    if config is not None and getattr(config, "distance", None) == "euclidean" and gate:
-        return math.sqrt(float(gate))
-    return default
-
-
-class TemplateRescuer:
-    """Adapter between a :class:`TemplateBank` and ``Tracker.step(dets, rescue=...)``.
-
-    Per frame ``k``::
-
-        dets = detector(frame)
-        out = tracker.step(dets, rescue=rescuer.callback(frame))
-        rescuer.observe(frame, dets, out)
-
-    Parameters
-    ----------
-    bank : TemplateBank
-        The templates and the search parameters.
-    tracker : mvtrack.tracking.Tracker, optional
-        The tracker whose output is observed: needed to map the public IDs of its output rows
-        to the internal ``uid`` the rescue callback receives, and to forget deleted tracks.
-        May be given later with :meth:`attach`.
-    gate_radius : float, optional
-        Search radius in px; default: the tracker's gate radius for the Euclidean distance
-        (``sqrt(gate)``), else the bank's ``gate_radius``.
-    detector : FrontEnd, optional
-        The detection front end; its foreground ``mask`` after each frame restricts the
-        templates to the objects' own pixels (see :meth:`TemplateBank.observe`). Strongly
-        recommended: without it a template is the whole box, road included, and it can keep
-        matching the empty road after a pedestrian or vehicle has left.
-    max_radius : float, optional
-        Search no farther than this (px) from the centre the tracker gives, even if the gate
-        is wider. For a caller that accepts only matches this close (the pipeline's
-        ``max_shift`` around a stopped vehicle's last position) the rest of the gate is
-        wasted work: an NCC over a 20 px gate costs (2·20 + 1)² placements, over 4 px 9².
-    """
-
-    def __init__(
-        self,
-        bank: TemplateBank,
-        tracker: Any = None,
-        gate_radius: float | None = None,
-        detector: Any = None,
-        max_radius: float | None = None,
-    ) -> None:
-        if max_radius is not None and not max_radius >= 0:
-            raise ValueError(f"max_radius must be ≥ 0 px or None, got {max_radius}")
-        self.bank = bank
-        self.tracker = tracker
-        self.detector = detector
-        self._radius = gate_radius
-        self.max_radius = None if max_radius is None else float(max_radius)
-
-    def attach(self, tracker: Any) -> None:
-        """Use ``tracker`` (and forget templates of any previous one)."""
-        self.tracker = tracker
-        self.bank.clear()
-
-    @property
-    def gate_radius(self) -> float:
-        """The search radius in px (the gate, capped at ``max_radius``)."""
-        if self._radius is not None:
-            r = float(self._radius)
-        else:
-            r = gate_radius_of(self.tracker, self.bank.gate_radius)
-        return r if self.max_radius is None else min(r, self.max_radius)
-
-    def callback(self, frame: Image) -> RescueFn:
-        """The ``rescue`` argument of ``tracker.step`` for ``frame``."""
-        return self.bank.bind(frame, self.gate_radius)
-
-    def observe(self, frame: Image, dets: Detections, tracks: TrackFrame) -> None:
-        """Record the detected boxes of this frame's tracks; forget deleted tracks.
-
-        Rows of ``tracks`` with ``det_index ≥ 0`` and a public ID are stored under the
-        tracker's internal uid (``tracker.row_uids``, row-aligned with its last output; or, for
-        a tracker without it, looked up through ``tracker.tracks`` by ``track_id``) with the
-        detection's box (the last detected appearance). Deleted tracks are forgotten once the
-        bank holds more tracks than the tracker has live ones (so at most twice as many).
-        """
-        if self.tracker is None:
-            raise ValueError("TemplateRescuer: attach a tracker before observing frames")
-        det = tracks.det_index
-        rows = det >= 0
-        if getattr(getattr(self.tracker, "config", None), "output_tentative", True):
-            rows &= tracks.track_id > 0  # tentative rows (ID −1) are output too
-        row_uids = getattr(self.tracker, "row_uids", None)
-        if row_uids is not None and len(row_uids) == len(det):
-            uids = row_uids[rows]
-            d = det[rows]
-        else:
-            uids, d = self._uids_by_id(tracks.track_id[rows], det[rows])
-        table = self.tracker.tracks
-        if self.bank.uids.size > len(table):  # some are dead: forget them
-            self.bank.retain(table.uid)
-        mask = getattr(self.detector, "mask", None) if self.detector is not None else None
-        if mask is not None and mask.shape != frame.shape[:2]:
-            raise ValueError(f"observe: mask is {mask.shape}, the frame {frame.shape[:2]}")
-        self.bank._record(frame, uids, dets.xy[d], dets.wh[d], mask)
-
-    def _uids_by_id(self, ids: IntArray, det: IntArray) -> tuple[IntArray, IntArray]:
-        """Internal uids of public ``ids`` through ``tracker.tracks`` (unknown ones dropped)."""
-        table = self.tracker.tracks
-        t_uid = np.asarray(table.uid, np.int64)
-        t_id = np.asarray(table.track_id, np.int64)
-        if not (t_id.size and ids.size):
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        order = np.argsort(t_id, kind="stable")
-        sorted_ids = t_id[order]
-        pos = np.minimum(np.searchsorted(sorted_ids, ids), t_id.size - 1)
-        ok = sorted_ids[pos] == ids
-        return t_uid[order][pos][ok], det[ok]

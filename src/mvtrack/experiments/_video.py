@@ -20,9 +20,9 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 from mvtrack.config import RunSettings
-from mvtrack.pipeline import PipelineResult, build_rescuer, resolve_settings, run_frames
 from mvtrack.sim.scenes import Scene
 from mvtrack.tracking import Tracker, TrackerConfig, TrackLog
+from mvtrack.video import PipelineResult, build_rescuer, resolve_settings, run_frames
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
@@ -320,8 +320,8 @@ def prediction_errors(run: SceneRun, obj_id: int, warmup_hits: int = 6) -> dict[
 def default_config(scene: Scene) -> TrackerConfig:
     """The tracker configuration ``mvtrack track`` uses by default for this scene's video
     (the ``default`` preset with the size-dependent defaults of
-    :func:`mvtrack.pipeline.resolve_settings`)."""
-    from mvtrack.pipeline import build_tracker_config
+    :func:`mvtrack.video.resolve_settings`)."""
+    from mvtrack.video import build_tracker_config
 
     return build_tracker_config(resolve_settings(RunSettings(), scene.size), scene.fps)
 
@@ -343,7 +343,7 @@ def summarise(run: SceneRun, min_assoc: int = 5) -> dict[str, Any]:
         "spurious": int((obj == 0).sum()),
         "coverage": coverage,
         "frames": run.result.n_frames,
-        "fps": round(run.result.fps, 1),
+        "processing_speed": round(run.result.processing_speed, 1),
     }
 
 

@@ -2,9 +2,9 @@
 
 A predictor is a stateless object (its parameters only); the per-track state is a dataclass
 of arrays with a leading batch dimension ``N`` (one row per track), so the tracker can grow and
-shrink it with :func:`mvtrack._batch.take` and :func:`mvtrack._batch.concat`. Positions are
-2-D image coordinates in pixels; time is in frames (Δt = 1 frame): the tracker converts
-physical units (seconds, pixels per second) to frames before it builds a predictor.
+shrink it with :func:`mvtrack.types.take_rows` and :func:`mvtrack.types.concat_rows`.
+Positions are 2-D image coordinates in pixels; time is in frames (Δt = 1 frame): the tracker
+converts physical units (seconds, pixels per second) to frames before it builds a predictor.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 Each class implements :class:`mvtrack.filters.base.Predictor`: a stateless object holding
 parameters, and a per-track state that is a frozen dataclass of arrays with leading dimension
-``N`` (one row per track), so :func:`mvtrack._batch.take` / :func:`mvtrack._batch.concat` grow
-and shrink it. Units are pixels and frames (Δt = 1 frame).
+``N`` (one row per track), so :func:`mvtrack.types.take_rows` /
+:func:`mvtrack.types.concat_rows` grow and shrink it. Units are pixels and frames (Δt = 1 frame).
 
 =================  ==========================================================================
 name               method

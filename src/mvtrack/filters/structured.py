@@ -41,7 +41,8 @@ Where we go beyond paper 3 (each documented on the implementing line):
   body keep their relative positions far more steadily than the body moves; with Q_r = Q_c the
   CA relations of the X9 scene learn the legs' swing and extrapolate it while the legs are
   hidden, see the ``occlusion`` experiment) and ``relation_noise="occlusion"`` (R_r scaled by
-  1/((1 − α^i)(1 − α^j))).
+  1/((1 − α^i)(1 − α^j))), and ``order="cells-first"`` ((13) before (15), which then blends
+  the cells' posteriors instead of their priors; not the specification's order).
 
 For the tracker, :class:`StructuredPredictor` (name ``structured``, built by
 ``mvtrack.filters.predictors.make_predictor("structured")``) wraps the SKF behind the
@@ -207,6 +208,11 @@ class SKFParams:
         ``"constant"``: R_r for every relation update (SPEC §3.3, E3.9). ``"occlusion"`` (not
         in paper 3): R_r / ((1 − α^i)(1 − α^j)), so an occluded part's own prediction, which
         (15) mixes into the relation measurement, cannot drag the learned offset along.
+    order : {"relations-first", "cells-first"}
+        ``"relations-first"``: the relation measurements (15) blend in the cells' *priors*
+        m_c^{j−} and (14) runs before (13), as SPEC §3.1 step 5 orders them.
+        ``"cells-first"`` (not the specification's): (13) first, then (15) with the cells'
+        *posteriors* in place of m_c^{j−}.
     """
 
     model: Literal["ca", "cv"] = "ca"
@@ -221,6 +227,7 @@ class SKFParams:
     normalise: Literal["count", "weights"] = "count"
     relation_damping: float = 0.8
     relation_noise: Literal["constant", "occlusion"] = "constant"
+    order: Literal["relations-first", "cells-first"] = "relations-first"
 
     def __post_init__(self) -> None:
         if self.model not in ("ca", "cv"):
@@ -237,6 +244,10 @@ class SKFParams:
         if self.relation_noise not in ("constant", "occlusion"):
             raise ValueError(
                 f"relation_noise must be 'constant' or 'occlusion', got {self.relation_noise!r}"
+            )
+        if self.order not in ("relations-first", "cells-first"):
+            raise ValueError(
+                f"order must be 'relations-first' or 'cells-first', got {self.order!r}"
             )
         if not 0.0 <= self.relation_damping <= 1.0:
             raise ValueError(f"relation_damping must be in [0, 1], got {self.relation_damping}")
@@ -555,32 +566,14 @@ def update(
     w = 1.0 - alpha  # non-occlusion weights
     z0 = np.nan_to_num(z)  # missing rows carry weight 0 below
 
-    # relations: eq. (15) measurement, eq. (14) update
-    mr = relation_measurement(graph, z, alpha, pred)
-    # SPEC §3.3 "No match": the terms of an unmatched part are dropped, so a relation with an
-    # unmatched end has no measurement and coasts (with α^j = 1, (15) would measure the
-    # relation by its own prediction, a loop that lets the offset drift without bound).
-    matched = np.all(np.isfinite(z), axis=-1)
-    rel_ok = matched[:, graph.edges[:, 0]] & matched[:, graph.edges[:, 1]]
-    R_rel = np.broadcast_to(params.R_rel, (*state.xr.shape[:2], 2, 2))
-    if params.relation_noise == "occlusion":
-        # option (not in paper 3): the blend of (15) carries the information of the measured
-        # fractions only, so R_r is divided by (1 − α^i)(1 − α^j)
-        info = w[:, graph.edges[:, 0]] * w[:, graph.edges[:, 1]]
-        rel_ok &= info > 1e-6
-        R_rel = R_rel / np.maximum(info, 1e-6)[..., None, None]
-    Kr = kf_gain(state.Pr, H, R_rel)
-    gain_r = np.where(rel_ok[..., None, None], Kr, 0.0)
-    xr = state.xr + (gain_r @ (mr - state.xr[..., :2])[..., None])[..., 0]  # eq. (14) of paper 3
-    Pr = np.where(rel_ok[..., None, None], kf_riccati(state.Pr, Kr, H, R_rel), state.Pr)
-    # our addition (not in paper 3): a coasting relation's derivatives decay geometrically, so
-    # a part hidden for many frames keeps a bounded offset from its neighbours.
-    xr[..., 2:] *= np.where(rel_ok, 1.0, params.relation_damping)[..., None]
+    # (13) reads only priors (the relation prior, or (15) from the cell priors), so it can be
+    # computed before (14) with the same result as the specification's order
+    mr_prior = relation_measurement(graph, z, alpha, pred)
 
     # cells: eq. (13)
     Kc = kf_gain(state.Pc, H, params.R_cell)  # (N, K, n, 2)
     own_innov = w[..., None] * (z0 - pred)
-    rel = state.xr[..., :2] if params.inferred == "prior" else mr  # E3.4
+    rel = state.xr[..., :2] if params.inferred == "prior" else mr_prior  # E3.4
     head, tail = inferred_measurements(graph, z0, rel)
     i, j = graph.edges[:, 0], graph.edges[:, 1]
     # (1 − α^i)(m̃^{j|i} − m_c^{j−}) per edge, for each end, then summed over edges by incidence
@@ -605,6 +598,31 @@ def update(
     # information at all (own weight 1 − α^j = 0 and no weighted neighbour) keeps its prior.
     cell_info = (w > 0) | ((alpha > 0) & (nb_weight > 0))
     Pc = np.where(cell_info[..., None, None], kf_riccati(state.Pc, Kc, H, params.R_cell), state.Pc)
+
+    # relations: eq. (15) measurement, eq. (14) update
+    # (15) blends the cells' priors (SPEC order); option: their posteriors, after (13)
+    mr = mr_prior if params.order == "relations-first" else relation_measurement(
+        graph, z, alpha, xc[..., :2])
+    # SPEC §3.3 "No match": the terms of an unmatched part are dropped, so a relation with an
+    # unmatched end has no measurement and coasts (with α^j = 1, (15) would measure the
+    # relation by its own prediction, a loop that lets the offset drift without bound).
+    matched = np.all(np.isfinite(z), axis=-1)
+    rel_ok = matched[:, graph.edges[:, 0]] & matched[:, graph.edges[:, 1]]
+    R_rel = np.broadcast_to(params.R_rel, (*state.xr.shape[:2], 2, 2))
+    if params.relation_noise == "occlusion":
+        # option (not in paper 3): the blend of (15) carries the information of the measured
+        # fractions only, so R_r is divided by (1 − α^i)(1 − α^j)
+        info = w[:, graph.edges[:, 0]] * w[:, graph.edges[:, 1]]
+        rel_ok &= info > 1e-6
+        R_rel = R_rel / np.maximum(info, 1e-6)[..., None, None]
+    Kr = kf_gain(state.Pr, H, R_rel)
+    gain_r = np.where(rel_ok[..., None, None], Kr, 0.0)
+    xr = state.xr + (gain_r @ (mr - state.xr[..., :2])[..., None])[..., 0]  # eq. (14) of paper 3
+    Pr = np.where(rel_ok[..., None, None], kf_riccati(state.Pr, Kr, H, R_rel), state.Pr)
+    # our addition (not in paper 3): a coasting relation's derivatives decay geometrically, so
+    # a part hidden for many frames keeps a bounded offset from its neighbours.
+    xr[..., 2:] *= np.where(rel_ok, 1.0, params.relation_damping)[..., None]
+
     terms = SKFTerms(term2, term3, mr, head, tail)
     return SKFState(xc, Pc, xr, Pr), terms
 

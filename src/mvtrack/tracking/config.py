@@ -13,8 +13,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-#: Assignment rules understood by :func:`mvtrack.association.assign`.
-ASSIGN_RULES = ("nearest", "greedy", "optimal")
+from mvtrack.registry import ASSIGN_RULES
+from mvtrack.tracking.scores import check_scale
 
 
 @dataclass(frozen=True)
@@ -153,7 +153,28 @@ class TrackerConfig:
         consistency that the overlap enforces in IoU association. ``None`` disables it.
         Default 2, for a detector's boxes; the video pipeline turns it off for the
         disturbance map's blobs, which merge and split
-        (:func:`mvtrack.pipeline.resolve_settings`).
+        (:func:`mvtrack.video.resolve_settings`).
+    min_track_length : float or None
+        Seconds. Offline runs only (:func:`~mvtrack.tracking.track_detections`): a track with
+        fewer output rows than this many seconds of frames is left out whole
+        (:func:`mvtrack.tracking.log.drop_short_tracks`). ``None`` keeps every track.
+    score_scale : {"auto", "prob"} or (lo, hi)
+        How detection scores are read (:mod:`mvtrack.tracking.scores`): ``"auto"`` ranks each
+        score among those of the run so far (offline: of the whole file), so thresholds work
+        on any detector's scale; ``"prob"`` takes them as probabilities; ``(lo, hi)`` maps
+        ``lo … hi`` linearly onto 0 … 1. ``score_high`` and ``min_score`` are on this
+        calibrated scale.
+    score_high : float or None
+        Calibrated score in [0, 1] from which a detection is *high*: only high detections are
+        matched in the first stages and start tracks; the others (*low*) are offered only to
+        the established tracks left unmatched, in a last stage with the first stage's
+        distance and gate, so a track lives on through a partial occlusion without clutter
+        starting tracks (the association of ByteTrack). ``None``: every detection is high.
+    min_score : float
+        Calibrated score in [0, 1] below which a detection is dropped before association.
+    nms_iou : float or None
+        Within a frame, a detection that overlaps a higher-scored one by at least this IoU is
+        dropped before association (duplicate suppression); ``None`` disables it.
     backfill : bool
         Offline runs only (:func:`~mvtrack.tracking.track_detections`): once a track is
         confirmed, the rows of its tentative frames — from its first detection on — are
@@ -191,6 +212,11 @@ class TrackerConfig:
     size_gate: float | None = 2.0
     backfill: bool = True
     interpolate: bool = True
+    min_track_length: float | None = 0.3
+    score_scale: str | tuple[float, float] = "auto"
+    score_high: float | None = 0.5
+    min_score: float = 0.2
+    nms_iou: float | None = None
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -251,6 +277,24 @@ class TrackerConfig:
         s = self.size_smoothing
         if not isinstance(s, (int, float)) or not (0.0 < s <= 1.0):
             raise bad("size_smoothing", "must be in (0, 1]")
+        try:
+            check_scale(self.score_scale)
+        except ValueError as exc:
+            raise bad("score_scale", str(exc)) from None
+        mtl = self.min_track_length
+        if mtl is not None and not (
+            isinstance(mtl, (int, float)) and math.isfinite(mtl) and mtl >= 0
+        ):
+            raise bad("min_track_length", "must be a finite number of seconds >= 0 or None")
+        for name in ("score_high", "min_score", "nms_iou"):
+            v = getattr(self, name)
+            if v is None and name != "min_score":
+                continue
+            if not isinstance(v, (int, float)) or not (0.0 <= v <= 1.0):
+                tail = "" if name == "min_score" else " or None"
+                raise bad(name, f"must be a number in [0, 1]{tail}")
+        if self.nms_iou is not None and self.nms_iou <= 0:
+            raise bad("nms_iou", "must be > 0 or None")
         for name in ("predictor_params", "distance_params", "assign_params"):
             if not isinstance(getattr(self, name), Mapping):
                 raise bad(name, "must be a mapping of keyword arguments")
@@ -294,7 +338,8 @@ def _round(x: float) -> int:
 
 
 #: what both paper presets share: R = 4 px² (SPEC §2.1 [R]), the predictors' own priors, no
-#: recovery stage, no scaling with the box size or size gate, paper 1's warm-up gate centre
+#: recovery stage, no scaling with the box size or size gate, every detection used whatever
+#: its score (the papers' detections have none), paper 1's warm-up gate centre
 #: until 2M = 6 associations
 _PAPER_COMMON: dict[str, Any] = {
     "size_ref": None,
@@ -306,6 +351,9 @@ _PAPER_COMMON: dict[str, Any] = {
     "recover_speed": None,
     "second_gate": None,
     "size_gate": None,
+    "score_high": None,
+    "min_score": 0.0,
+    "min_track_length": None,
     "warmup": True,
     "warmup_hits": 6,
 }
@@ -368,10 +416,15 @@ def default(fps: float = 30.0) -> TrackerConfig:
     boxes (``size_ref``). Confirmation on 2 consecutive hits; a track coasts up to 0.3 s but
     its coasting rows are output only for the first 0.08 s (``coast_output``). A track and a
     detection whose box widths or heights differ by more than a factor 2 are never paired
-    (``size_gate``; off in the video pipeline). Offline runs
+    (``size_gate``; off in the video pipeline). Detection scores are ranked among the
+    run's (``score_scale="auto"``): the lowest 20 % are dropped (``min_score``), those below
+    the median only extend established tracks (``score_high``); chosen by leave-one-sequence-out
+    on the MOT15 public detections (docs/bench/mot15-defaults.md). Detections without a score
+    (blobs, simulations) are all high. Offline runs
     (:func:`~mvtrack.tracking.track_detections`) write a confirmed track from its first
     detection on (``backfill``) and the gaps it bridged in full, interpolated
-    (``interpolate``)."""
+    (``interpolate``), and leave out tracks shorter than 0.3 s (``min_track_length``; 0.6 s
+    measured a little better on MOT15 but drops true short tracks of TUD-Campus)."""
     return TrackerConfig(fps=fps)
 
 
@@ -384,7 +437,8 @@ def preset(name: str, **overrides: Any) -> TrackerConfig:
 
     Overrides the preset function takes (``fps``, on which its frame-based paper values
     depend, and ``predictor`` for ``paper1``) are passed to it; the others replace fields of
-    its result. Changing ``distance`` without a ``gate`` uses the new distance's default.
+    its result. Changing ``distance`` to another one without a ``gate`` uses the new
+    distance's default; naming the preset's own distance changes nothing.
     """
     try:
         build = PRESETS[name]
@@ -392,11 +446,11 @@ def preset(name: str, **overrides: Any) -> TrackerConfig:
         raise ValueError(
             f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}"
         ) from None
-    if "distance" in overrides and "gate" not in overrides:
-        overrides["gate"] = None  # the new distance's own default gate
     # arguments the preset itself takes (fps, paper 1's predictor) go to it, the rest replace
     # fields of its result
     takes = inspect.signature(build).parameters
     own = {k: overrides.pop(k) for k in list(overrides) if k in takes}
     config = build(**own)
+    if overrides.get("distance", config.distance) != config.distance and "gate" not in overrides:
+        overrides["gate"] = None  # a new distance: its own default gate
     return config.replace(**overrides) if overrides else config

@@ -40,13 +40,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack import _batch
 from mvtrack.association.assign import assign as assign_pairs
 from mvtrack.association.distances import TrackView, get_distance
 from mvtrack.association.gating import candidate_pairs
+from mvtrack.association.regions import SHAPE_PARAMS, GateRegions, axis_shapes, gate_shapes
 from mvtrack.filters.predictors import make_predictor
 from mvtrack.tracking import associate as fast_assoc
 from mvtrack.tracking.config import TrackerConfig
+from mvtrack.tracking.config import _round as _round_frames
 from mvtrack.tracking.fastkf import CVState, FastCVPredictor
 from mvtrack.tracking.lifecycle import (
     CONFIRMED,
@@ -56,8 +57,9 @@ from mvtrack.tracking.lifecycle import (
     hand_out_ids,
     next_state,
 )
-from mvtrack.tracking.log import TrackLog, backfill, interpolate_gaps
-from mvtrack.types import Detections, TrackFrame
+from mvtrack.tracking.log import TrackLog, backfill, drop_short_tracks, interpolate_gaps
+from mvtrack.tracking.scores import ScoreCalibration, duplicates
+from mvtrack.types import Detections, TrackFrame, concat_rows, take_rows
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -84,7 +86,7 @@ class TrackTable:
     """The ``N`` live tracks as a struct of arrays (the predictor state is kept beside it).
 
     The columns are stored in two blocks, one ``int64`` and one ``float64``, so that growing
-    and shrinking the table costs two array operations (``mvtrack._batch.take`` / ``concat``
+    and shrinking the table costs two array operations (``types.take_rows`` / ``concat_rows``
     work on it too); the properties give each column by name.
 
     Attributes
@@ -173,7 +175,7 @@ def _take_state(state: Any, idx: NDArray[np.intp] | slice) -> Any:
         if isinstance(idx, slice):
             return CVState(state.x[idx], state.P[idx])
         return CVState(state.x.take(idx, 0), state.P.take(idx, 0))
-    return _batch.take(state, idx)
+    return take_rows(state, idx)
 
 
 def _kept_rows(delete: BoolArray) -> NDArray[np.intp] | slice:
@@ -218,7 +220,7 @@ def _put_state(state: Any, idx: NDArray[np.intp], new: Any) -> Any:
 def _concat_state(a: Any, b: Any) -> Any:
     if type(a) is CVState:
         return CVState(np.concatenate([a.x, b.x]), np.concatenate([a.P, b.P]))
-    return _batch.concat(a, b)
+    return concat_rows(a, b)
 
 
 def _build_predictor(config: TrackerConfig) -> Any:
@@ -317,6 +319,12 @@ class Tracker:
         self._birth_row = np.array([0, -1, TENTATIVE, 1, 0, 1, 0, 0], dtype=np.int64)
         self._uid_ramp = _uid_ramp(16)
         self._recover_hits = max(self.config.recover_min_hits, self._fp.confirm_hits)
+        c = self.config
+        self._scores = (
+            ScoreCalibration(c.score_scale)
+            if c.score_high is not None or c.min_score > 0 or c.nms_iou is not None
+            else None
+        )
         self.reset()
 
     def reset(self) -> None:
@@ -327,6 +335,15 @@ class Tracker:
         self.row_uids = np.zeros(0, dtype=np.int64)
         self._next_uid = 0
         self._next_id = 1
+        if self._scores is not None:
+            self._scores.reset()
+
+    def prime_scores(self, scores: Any) -> None:
+        """Calibrate the ``"auto"`` score scale on ``scores`` (every score of an offline run)
+        instead of on the scores seen so far (:class:`~mvtrack.tracking.scores.ScoreCalibration`).
+        """
+        if self._scores is not None:
+            self._scores.prime(scores)
 
     @property
     def n_tracks(self) -> int:
@@ -366,8 +383,9 @@ class Tracker:
         out = None
         ps = self.pstate
         drow = _detection_rows(dets)
+        sel = self._score_select(dets) if m else None  # (high, low) rows, or None: all high
         if n == 0:
-            ud = np.arange(m)
+            ud = np.arange(m) if sel is None else sel[0]
         else:
             ps = pred.predict(ps)  # time update, eqs. (6)–(7) of paper 1
             gxy = pred.position(ps)
@@ -379,14 +397,17 @@ class Tracker:
                 if self._scale_r:
                     r_rows = pred.r * self._r_factor(f2)  # r max(f_x, f_y)² per track
             staged = False
-            if m == 0:
+            first = dets if sel is None else dets.take(sel[0])  # the high detections
+            if len(first) == 0:
                 mt = md = ud = _EMPTY
             elif self._fast_gate is not None:
                 mt, md, ud, staged = self._associate_fast(
-                    ps, gxy, dets, f2, r_rows, tab.floats[:, WH]
+                    ps, gxy, first, f2, r_rows, tab.floats[:, WH]
                 )
             else:
-                mt, md, ud = self._associate(ps, gxy, tab, dets)
+                mt, md, ud = self._associate(ps, gxy, tab, first)
+            if sel is not None:  # back to the rows of dets
+                md, ud = sel[0].take(md), sel[0].take(ud)
             det_index = np.empty(n, dtype=np.int64)
             det_index.fill(-1)
             det_index[mt] = md
@@ -408,6 +429,11 @@ class Tracker:
                     used[md2] = True
                     ud = ud[~used[ud]]
                     recovered = mt2
+            if sel is not None and sel[1].size and mt.size < n:  # low detections, last
+                mt2, md2 = self._low_stage(ps, gxy, tab, det_index, drow, sel[1], f2, r_rows)
+                if mt2.size:
+                    det_index[mt2] = md2
+                    mt, md = np.concatenate([mt, mt2]), np.concatenate([md, md2])
             # each track's detection (x, y, w, h); NaN for the tracks without one (index −1)
             zwh = drow.take(det_index, 0)
             z = zwh[:, :2]
@@ -479,6 +505,62 @@ class Tracker:
         )
 
     # ---------------------------------------------------------------------------- internals
+
+    def _score_select(self, dets: Detections) -> tuple[NDArray[np.intp], NDArray[np.intp]] | None:
+        """The high and the low detections (rows of ``dets``) by calibrated score, without
+        the dropped ones (below ``min_score``, or duplicates of a better box); ``None`` when
+        every detection is high and none is dropped."""
+        if self._scores is None:
+            return None
+        c = self._scores(dets.score)
+        cfg = self.config
+        keep = c >= cfg.min_score
+        if cfg.nms_iou is not None:
+            keep &= ~duplicates(dets.xy, dets.wh, dets.score, cfg.nms_iou)
+        high = keep if cfg.score_high is None else keep & (c >= cfg.score_high)
+        if high.all():
+            return None
+        return high.nonzero()[0], (keep & ~high).nonzero()[0]
+
+    def _low_stage(
+        self, ps: Any, gxy: FloatArray, tab: TrackTable, det_index: IntArray,
+        drow: FloatArray, lo: NDArray[np.intp], f2: FloatArray | None,
+        r_rows: FloatArray | None,
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """Last stage: the established (non-tentative) tracks still unmatched against the low
+        detections ``lo``, with the first stage's distance and gate around the prediction
+        (``score_high``). ``drow`` are the detections' rows ``x, y, w, h``."""
+        cand = ((det_index < 0) & (tab.ints[:, STATE] != TENTATIVE)).nonzero()[0]
+        if cand.size == 0:
+            return _EMPTY, _EMPTY
+        left = drow.take(lo, 0)
+        pred = self.predictor
+        if self._fast_gate is None:
+            view = TrackView(
+                gxy.take(cand, 0), pred.position_cov(ps)[cand], pred.innovation_cov(ps)[cand],
+                pred.velocity(ps)[cand], tab.floats[cand, WH],
+            )
+            sub = Detections(0, left[:, :2], left[:, 2:])
+            ti, dj, cost = candidate_pairs(
+                view, sub, self._distance, self._gate, **self._distance_params
+            )
+            a = assign_pairs(ti, dj, cost, cand.size, lo.size, self.config.assign,
+                             **self._assign_params)
+            return cand[a.track], lo[a.det]
+        scale = None if f2 is None else f2.take(cand, 0)
+        if self._fast_gate == "mahalanobis":
+            r = pred.r if r_rows is None else r_rows[cand]
+            scale = pred.position_var(ps)[cand] + r  # S = (P̄ + r) I
+        size = self._size_term(tab.floats[cand, WH], left[:, 2:])
+        txy = gxy.take(cand, 0)
+        if cand.size * lo.size <= fast_assoc.DENSE_LSA:
+            mt, md = fast_assoc.dense_optimal(txy, left[:, :2], scale, self._gate, size)
+        else:
+            ti, dj, cost = fast_assoc.gate_pairs(txy, left[:, :2], scale, self._gate, size)
+            if ti.size == 0:
+                return _EMPTY, _EMPTY
+            mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, lo.size, self._gate)
+        return cand[mt], lo[md]
 
     def _associate(
         self, ps: Any, gxy: FloatArray, tab: TrackTable, dets: Detections
@@ -701,11 +783,47 @@ class Tracker:
         tab = TrackTable(np.concatenate([tab.ints, ints]), np.concatenate([tab.floats, floats]))
         return tab, _concat_state(ps, new_ps), born, uid
 
+    def gates(self) -> GateRegions:
+        """The gates the next :meth:`step` applies, one per live track (tentative included).
+
+        The predictor state is advanced one frame (the tracker is not changed). The centre is
+        the prediction, or paper 1's warm-up centre ``2 y_k − y_{k−1}`` while a track has
+        fewer than ``warmup_hits`` associations (SPEC §1.1 [R]). The shape is the configured
+        distance's region (:func:`~mvtrack.association.regions.gate_shapes`); the Euclidean
+        gates of boxes larger than ``size_ref`` are stretched to ``diag(f_x², f_y²)``, and the
+        Mahalanobis disc of the closed-form ``kalman-cv`` is ``(P̄ + r f²) I``, as
+        :meth:`step` applies them. The second stage's gates (``second_gate``) are stretched
+        the same way; the recovery stage is not a gate around the centre and is left out.
+        """
+        tab, pred, n = self.tracks, self.predictor, len(self.tracks)
+        ps = pred.predict(self.pstate)
+        gxy = pred.position(ps)
+        if self._fp.warmup_hits:
+            gxy = self._warmup_centre(tab, gxy, self._k)
+        f2 = None  # as in step: size factors only when a box is larger than size_ref
+        if self._ref is not None and np.count_nonzero(tab.floats[:, WH] > self._ref):
+            f2 = self._size_scale2(tab.floats[:, WH])
+        if self._fast_gate == "euclidean":
+            shape = axis_shapes(f2, n)
+        elif self._fast_gate == "mahalanobis":
+            r = pred.r * self._r_factor(f2) if f2 is not None and self._scale_r else pred.r
+            shape = axis_shapes(pred.position_var(ps) + r, n)  # S = (P̄ + r) I
+        else:
+            params = {k: v for k, v in self._distance_params.items() if k in SHAPE_PARAMS}
+            _, shape, _ = gate_shapes(
+                self.config.distance, gxy, pred.position_cov(ps), pred.innovation_cov(ps),
+                pred.velocity(ps), self._gate, **params,
+            )
+        second = None if self._gate2 is None else axis_shapes(f2, n)
+        return GateRegions(tab.uid.copy(), tab.track_id.copy(), np.array(gxy), shape, second,
+                           self._gate, self._gate2)
+
 
 def track_detections(
     frames: Iterable[Detections],
     config: TrackerConfig | None = None,
     rescue: RescueFn | None = None,
+    scores: Any = None,
 ) -> TrackLog:
     """Run a fresh :class:`Tracker` over ``frames`` (one :class:`Detections` per frame).
 
@@ -714,6 +832,12 @@ def track_detections(
     without ``output_tentative``) a confirmed track's rows start at its first detection
     (:func:`mvtrack.tracking.log.backfill`); with ``config.interpolate`` the gaps a track
     bridged are written in full, interpolated (:func:`mvtrack.tracking.log.interpolate_gaps`).
+
+    The ``"auto"`` score scale is calibrated on the scores seen so far, as online (the same
+    thresholds mean the same in both modes); ``scores`` (for example every score of the file)
+    calibrates it on those instead (:meth:`Tracker.prime_scores`). On the MOT15 development
+    sequences the run-so-far calibration measured better offline too
+    (``docs/bench/mot15-defaults.md``).
     """
     config = TrackerConfig() if config is None else config
     own = isinstance(config, TrackerConfig)
@@ -723,6 +847,8 @@ def track_detections(
     if fill:  # every coasting row, to be interpolated or cut to coast_output afterwards
         inner = inner.replace(coast_output=None)
     tracker = Tracker(inner)
+    if scores is not None:
+        tracker.prime_scores(scores)
     out: list[TrackFrame] = []
     uids: list[IntArray] = []
     last = None
@@ -742,6 +868,8 @@ def track_detections(
         out = backfill(out, uids)
     if fill:
         out = interpolate_gaps(out, config.frames().coast_output)
+    if own and config.min_track_length is not None:  # whole tracks shorter than this go
+        out = drop_short_tracks(out, _round_frames(config.min_track_length * config.fps))
     log = TrackLog()
     for tf in out:
         log.append(tf)

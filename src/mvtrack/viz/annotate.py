@@ -8,7 +8,9 @@ The gate of a track is the region ``{z : (z - c)ᵀ C⁻¹ (z - c) ≤ r²}`` ar
 position ``c``: a circle of radius ``r`` for the Euclidean gate (eq. 8 of paper 2, circular mask
 of paper 1 §1.1) with ``C = I``, an axis-aligned ellipse for the uncoupled gate (eq. 9 of paper 2,
 ``C = diag(P̄x, P̄y)``), the rotated coupled region (SPEC §2.3) or the Mahalanobis χ² gate
-(``C = S``). :func:`gate_ellipses` turns ``(C, r²)`` into semi-axes and an angle.
+(``C = S``), each stretched as the tracker stretches it: the regions come from
+:meth:`mvtrack.tracking.Tracker.gates` (:class:`mvtrack.association.regions.GateRegions`).
+:func:`gate_ellipses` turns ``(C, r²)`` into semi-axes and an angle.
 """
 
 from __future__ import annotations
@@ -86,77 +88,6 @@ def gate_ellipses(cov: FloatArray, r2: float | FloatArray) -> tuple[FloatArray, 
     axes = np.sqrt(np.asarray(r2, dtype=np.float64).reshape(-1, 1) * lam)
     angle = np.degrees(0.5 * np.arctan2(2.0 * b, a - d))
     return axes, angle
-
-
-def gate_shapes(
-    distance: str,
-    xy: FloatArray,
-    cov: FloatArray,
-    S: FloatArray,
-    velocity: FloatArray,
-    gate: float,
-    *,
-    rho: float = 2.0,
-    min_speed: float = 0.5,
-    use_innovation: bool | None = None,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The gate region of each track as ``(centre, C, r²)`` for :func:`draw_gates`.
-
-    Mirrors the distances of :mod:`mvtrack.association.distances`:
-
-    - ``euclidean`` (eq. 8 of paper 2, paper 1's circular mask): ``C = I``, ``r² = gate`` (px²);
-    - ``uncoupled`` (eq. 9 of paper 2): ``C = diag(P̄x, P̄y)``;
-    - ``coupled`` (SPEC §2.3): ``C = R_θ diag(ρ² σ², σ²) R_θᵀ`` with σ² = (P̄x + P̄y)/2 and θ
-      the direction of the predicted velocity; eq. (9)'s ellipse where ``|v̄| < min_speed``;
-    - ``mahalanobis``: ``C = S`` (or P̄ when ``use_innovation`` is False).
-
-    Other distances (``iou``, ``coupled-literal``, whose region is not an ellipse about the
-    prediction, E2.7) give NaN matrices, which :func:`draw_gates` skips.
-
-    Parameters
-    ----------
-    distance : str
-        Distance name.
-    xy, cov, S, velocity : arrays
-        Predicted positions (K, 2), P̄ (K, 2, 2), S (K, 2, 2), velocity (K, 2) px/frame.
-    gate : float
-        Gate on the squared distance.
-    rho, min_speed, use_innovation
-        As in the distance functions (``use_innovation`` defaults to False except for
-        ``mahalanobis``).
-    """
-    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-    k = xy.shape[0]
-    cov = np.asarray(cov, dtype=np.float64).reshape(k, 2, 2)
-    S = np.asarray(S, dtype=np.float64).reshape(k, 2, 2)
-    v = np.asarray(velocity, dtype=np.float64).reshape(k, 2)
-    r2 = np.full(k, float(gate))
-    if use_innovation is None:
-        use_innovation = distance == "mahalanobis"
-    base = S if use_innovation else cov
-    var = np.stack([base[:, 0, 0], base[:, 1, 1]], axis=1)
-    diag = np.zeros((k, 2, 2))
-    diag[:, 0, 0], diag[:, 1, 1] = var[:, 0], var[:, 1]
-    if distance == "euclidean":
-        shape = np.broadcast_to(np.eye(2), (k, 2, 2)).copy()
-    elif distance == "uncoupled":
-        shape = diag  # eq. (9) of paper 2
-    elif distance == "coupled":
-        s = np.hypot(v[:, 0], v[:, 1])
-        moving = s >= min_speed
-        s_safe = np.where(moving, s, 1.0)
-        c, sn = v[:, 0] / s_safe, v[:, 1] / s_safe
-        rot = np.stack([np.stack([c, -sn], 1), np.stack([sn, c], 1)], 1)  # columns: ∥, ⊥
-        sig2 = var.mean(axis=1)  # σ⊥² = (P̄x + P̄y)/2, SPEC §2.3 [R]
-        lam = np.zeros((k, 2, 2))
-        lam[:, 0, 0], lam[:, 1, 1] = rho**2 * sig2, sig2
-        rotated = rot @ lam @ rot.transpose(0, 2, 1)  # SPEC §2.3: R_θ diag(σ∥², σ⊥²) R_θᵀ
-        shape = np.where(moving[:, None, None], rotated, diag)
-    elif distance == "mahalanobis":
-        shape = base.copy()
-    else:
-        shape = np.full((k, 2, 2), np.nan)
-    return xy, shape, r2
 
 
 def ellipse_points(
@@ -329,6 +260,7 @@ def annotate_frame(
     gate_cov: FloatArray | None = None,
     gate_r2: float | FloatArray | None = None,
     outer_r2: float | FloatArray | None = None,
+    outer_cov: FloatArray | None = None,
     text: Sequence[str] = (),
 ) -> NDArray[np.uint8]:
     """A copy of ``frame`` (BGR or grey) with trails, gates, boxes, IDs and a text header.
@@ -343,9 +275,9 @@ def annotate_frame(
         Recent positions (push ``tracks`` into it before calling).
     gate_center, gate_cov, gate_r2 : optional
         Gate regions to draw (see :func:`draw_gates`); skipped when ``gate_cov`` is None.
-    outer_r2 : optional
-        Squared radii of a second, circular gate around the same centres (the tracker's
-        second association stage), drawn dimmer.
+    outer_r2, outer_cov : optional
+        A second gate around the same centres (the tracker's second association stage),
+        drawn dimmer: ``r²`` and shapes (default ``I``, circles of radius ``sqrt(outer_r2)``).
     text : sequence of str
         Lines written at the top left (frame number, settings).
     """
@@ -353,9 +285,10 @@ def annotate_frame(
     if trails is not None:
         draw_trails(img, trails)
     if gate_center is not None and outer_r2 is not None:
-        n = np.asarray(gate_center).reshape(-1, 2).shape[0]
-        draw_gates(img, gate_center, np.broadcast_to(np.eye(2), (n, 2, 2)), outer_r2,
-                   color=OUTER_GATE_COLOR)
+        if outer_cov is None:
+            n = np.asarray(gate_center).reshape(-1, 2).shape[0]
+            outer_cov = np.broadcast_to(np.eye(2), (n, 2, 2))
+        draw_gates(img, gate_center, outer_cov, outer_r2, color=OUTER_GATE_COLOR)
     if gate_cov is not None and gate_center is not None and gate_r2 is not None:
         draw_gates(img, gate_center, gate_cov, gate_r2)
     draw_boxes(img, tracks)

@@ -145,6 +145,9 @@ def place_labels(
     """
     fig = ax.figure
     renderer = fig.canvas.get_renderer()
+    # an axes with a fixed aspect (imshow) takes its final box only when drawn: place the
+    # labels in that box, not in the one before the aspect is applied
+    ax.apply_aspect()
     inside = ax.get_window_extent(renderer)
     px = fig.dpi / 72.0
     colors = colors if colors is not None else ["black"] * len(texts)
@@ -182,7 +185,7 @@ def place_labels(
         far = radii[i // len(angles)] > 3.0
         ann = ax.annotate(
             text, xy, xytext=tuple(offs[i]), textcoords="offset points", fontsize=fontsize,
-            color=color, ha=ha, va=va, path_effects=halo(2.5),
+            color=color, ha=ha, va=va, path_effects=halo(2.5), zorder=6,  # over the paths
             arrowprops={"arrowstyle": "-", "color": color, "lw": 0.6, "shrinkA": 0,
                         "shrinkB": 0} if far else None,
         )

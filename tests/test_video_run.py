@@ -1,4 +1,4 @@
-"""The video pipeline: frame loop, early ends (Ctrl-C, a failing source) and whole runs."""
+"""The video package: frame loop, early ends (Ctrl-C, a failing source) and whole runs."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from mvtrack.config import RunSettings
-from mvtrack.pipeline import run_frames, track_to_folder
 from mvtrack.types import Detections, TrackFrame
+from mvtrack.video import run_frames, track_to_folder
 
 
 def squares_video(
@@ -228,11 +228,10 @@ def test_no_video_skips_the_mp4(tmp_path) -> None:
 # ------------------------------------------------------------------ the drawn gate is the gate
 
 
-def _gate_probe(config, offset_dir: np.ndarray, factor: float) -> bool:
-    """Track one target moving 2 px/frame for 12 frames, then put the next detection at
+def _gate_probe(config, offset_dir: np.ndarray, factor: float, wh=(10.0, 8.0)) -> bool:
+    """Track one ``wh`` box moving 2 px/frame for 12 frames, then put the next detection at
     ``factor`` times the outermost drawn gate's extent along ``offset_dir`` (the second-stage
-    circle where the tracker has one); True if it is associated."""
-    from mvtrack.pipeline import next_gates, second_gates
+    gate where the tracker has one); True if it is associated."""
     from mvtrack.tracking import Tracker
     from mvtrack.viz.annotate import gate_ellipses
 
@@ -240,36 +239,77 @@ def _gate_probe(config, offset_dir: np.ndarray, factor: float) -> bool:
     rng = np.random.default_rng(0)
     for k in range(12):
         xy = np.array([[40.0 + 2.0 * k, 60.0]]) + rng.normal(0, 0.3, (1, 2))
-        tracker.step(Detections(k, xy, [[10.0, 8.0]]))
-    ids, center, shape, r2 = next_gates(tracker, 12)
-    assert ids.size == 1
-    outer = second_gates(tracker, 12)
-    if outer is not None:
-        assert outer[1][0] > r2[0]  # euclidean first gate: the outer circle is wider
-        shape, r2 = np.eye(2)[None], outer[1]
+        tracker.step(Detections(k, xy, [wh]))
+    gates = tracker.gates()
+    assert len(gates) == 1 and gates.track_id[0] > 0
+    center, shape, r2 = gates.center, gates.shape, gates.r2
+    if gates.second_shape is not None:
+        assert gates.second_r2 > r2  # euclidean first gate: the second stage's is wider
+        shape, r2 = gates.second_shape, gates.second_r2
     # distance to the boundary along offset_dir: t with (t u)ᵀ C⁻¹ (t u) = r²
     u = offset_dir / np.linalg.norm(offset_dir)
-    t = np.sqrt(r2[0] / (u @ np.linalg.inv(shape[0]) @ u))
+    t = np.sqrt(r2 / (u @ np.linalg.inv(shape[0]) @ u))
     axes, _ = gate_ellipses(shape, r2)
     assert axes[0, 1] - 1e-9 <= t <= axes[0, 0] + 1e-9
-    out = tracker.step(Detections(12, center + factor * t * u, [[10.0, 8.0]]))
-    return bool(len(out) and out.det_index[out.track_id == ids[0]][0] >= 0)
+    out = tracker.step(Detections(12, center + factor * t * u, [wh]))
+    return bool(len(out) and out.det_index[out.track_id == gates.track_id[0]][0] >= 0)
 
 
-@pytest.mark.parametrize("preset", ["paper1", "paper2", "default"])
+@pytest.mark.parametrize("preset", ["paper1", "paper2", "default", "mahalanobis"])
 @pytest.mark.parametrize("direction", [(1.0, 0.0), (0.0, 1.0), (1.0, -1.0)])
-def test_drawn_gate_is_the_trackers_gate(preset: str, direction: tuple[float, float]) -> None:
+@pytest.mark.parametrize("wh", [(10.0, 8.0), (150.0, 40.0)])
+def test_drawn_gate_is_the_trackers_gate(
+    preset: str, direction: tuple[float, float], wh: tuple[float, float]
+) -> None:
+    """A 150×40 box is larger than the default preset's size_ref: its gates stretch along x,
+    and the drawn gate stretches with them. (The recovery stage, around the last measurement,
+    is no gate and is not drawn: it is off here; its radius grows with large boxes too.)"""
+    from mvtrack.tracking import TrackerConfig
     from mvtrack.tracking import preset as make_preset
 
-    config = make_preset(preset, fps=30.0)
+    if preset == "mahalanobis":  # the closed-form kalman-cv's disc, (P̄ + r f²) I
+        config = TrackerConfig(fps=30.0, distance="mahalanobis", gate=None, second_gate=None)
+    else:
+        config = make_preset(preset, fps=30.0)
+    config = config.replace(recover_speed=None)
     d = np.asarray(direction)
-    assert _gate_probe(config, d, 0.97)
-    assert not _gate_probe(config, d, 1.03)
+    assert _gate_probe(config, d, 0.97, wh)
+    assert not _gate_probe(config, d, 1.03, wh)
+
+
+def test_a_large_box_is_drawn_with_the_stretched_gate() -> None:
+    """The default preset's gates of a 150×40 box are 3 times wider along x than the 10 px
+    circle (second stage: 20 px) of a small box; the drawing showed the small box's circles
+    and the tracker took detections far outside them."""
+    from mvtrack.tracking import Tracker, TrackerConfig
+    from mvtrack.viz.annotate import annotate_frame
+
+    config = TrackerConfig()
+    assert config.size_ref == 50.0 and config.second_gate == 20.0  # the figures below
+    tracker = Tracker(config)
+    for k in range(8):
+        tracker.step(Detections(k, [[100.0 + 2.0 * k, 60.0]], [[150.0, 40.0]]))
+    g = tracker.gates()
+    np.testing.assert_allclose(g.shape[0], np.diag([9.0, 1.0]))  # f_x = 150/50, f_y = 1
+    np.testing.assert_allclose(g.second_shape[0], np.diag([9.0, 1.0]))
+    c = g.center[0]
+    # the second gate's outline crosses the row y = c_y 60 px right of the centre, not 20 px
+    frame = np.zeros((120, 320, 3), np.uint8)
+    img = annotate_frame(frame, TrackFrame.empty(8), gate_center=g.center,
+                         gate_cov=g.shape, gate_r2=g.r2, outer_cov=g.second_shape,
+                         outer_r2=g.second_r2)
+    row = img[round(c[1]), :, :].any(axis=1)
+    right = np.flatnonzero(row[round(c[0]):])
+    assert right.size and 55 <= right.max() <= 65
+    assert row[round(c[0]) + 28 : round(c[0]) + 32].any()  # the first gate: 30 px
+    # and the tracker takes a detection 40 px to the right (outside the old 20 px drawing)
+    taken = tracker.step(Detections(8, c[None] + [[40.0, 0.0]], [[150.0, 40.0]]))
+    assert taken.det_index.tolist() == [0]
 
 
 def test_size_dependent_defaults_scale_with_the_image() -> None:
-    from mvtrack.pipeline import resolve_settings
     from mvtrack.tracking import TrackerConfig
+    from mvtrack.video import resolve_settings
 
     base = TrackerConfig()
     small = resolve_settings(RunSettings(), (320, 240))
@@ -367,7 +407,7 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
     somewhere before it is searched is the template bank's check, tests/test_template.py.)"""
     from types import SimpleNamespace
 
-    from mvtrack.pipeline import StoppedVehicleRescuer
+    from mvtrack.video import StoppedVehicleRescuer
 
     class FindsAll:
         def __init__(self) -> None:

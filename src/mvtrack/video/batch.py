@@ -2,14 +2,14 @@
 
 .. code-block:: text
 
-    videos ─▶ client.map(track_video, ...)   one task per video, pure=False
+    videos ─▶ client.map(track_one, ...)   one task per video, pure=False
            ─▶ worker: open_source ─▶ resolve_settings ─▶ track_to_folder   (as ``mvtrack track``)
            ─▶ as_completed ─▶ BatchItem per video ─▶ out_root/batch.json
 
 :func:`track_many` runs every video through the same code path as ``mvtrack track``
-(:func:`track_video`), each into its own folder ``out_root/<video stem>/``, so a batch gives the
-same ``results.txt`` as tracking the videos one after another. The work runs on
-:mod:`distributed`:
+(:func:`~mvtrack.video.jobs.track_one`), each into its own folder ``out_root/<video stem>/``,
+so a batch gives the same ``results.txt`` as tracking the videos one after another. The work
+runs on :mod:`distributed`:
 
 - ``scheduler=None`` starts a private ``LocalCluster`` of ``workers`` processes with one thread
   each (no dashboard) and closes it at the end;
@@ -28,279 +28,32 @@ cancels the others, closes the client and cluster and still writes ``batch.json`
 from __future__ import annotations
 
 import contextlib
-import glob
 import logging
 import os
-import re
 import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 from mvtrack.config import RunSettings
-
-#: the statuses of a :class:`BatchItem`
-STATUSES: tuple[str, ...] = ("ok", "failed", "cancelled")
+from mvtrack.video.jobs import (
+    STATUSES,
+    BatchItem,
+    finished_on_disk,
+    normalise_video,
+    one_line,
+    output_names,
+    remove_temp_files,
+    track_one,
+)
 
 #: file name of the batch summary inside ``out_root``
 SUMMARY_NAME = "batch.json"
 
-_URL = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
 _QUIET_LOGGERS = ("distributed", "tornado", "bokeh", "asyncio")
-
-
-@dataclass
-class BatchItem:
-    """The outcome of one video of a batch.
-
-    Attributes
-    ----------
-    video : str
-        The video as given to the worker (an absolute path, or a URL).
-    out : str
-        Its output folder.
-    status : str
-        ``"ok"``; ``"failed"`` (``error`` says why; a video that broke off mid-way keeps the
-        files of the frames before); ``"cancelled"`` (Ctrl-C before or while it ran).
-    frames : int
-        Frames tracked.
-    tracks : int
-        Tracks found.
-    fps : float or None
-        Processing speed of its tracking loop (frames per second).
-    seconds : float
-        Wall time of the task on its worker (open, track, write files).
-    error : str or None
-        One-line reason for a failed or cancelled video.
-    """
-
-    video: str
-    out: str
-    status: str = "cancelled"
-    frames: int = 0
-    tracks: int = 0
-    fps: float | None = None
-    seconds: float = 0.0
-    error: str | None = None
-
-    @property
-    def ok(self) -> bool:
-        """True when the video was tracked to its end."""
-        return self.status == "ok"
-
-    def as_dict(self) -> dict[str, Any]:
-        """JSON-ready form (one entry of ``batch.json``)."""
-        return asdict(self)
-
-
-# --------------------------------------------------------------------------- naming
-
-
-def _is_url(video: str) -> bool:
-    return bool(_URL.match(video))
-
-
-def normalise_video(video: str | os.PathLike[str]) -> str:
-    """An absolute path for a local video (so remote workers see the same name); URLs unchanged."""
-    text = os.fspath(video)
-    if _is_url(text):
-        return text
-    return str(Path(text).expanduser().absolute())
-
-
-def output_names(videos: Sequence[str | os.PathLike[str]]) -> list[str]:
-    """Folder names for ``videos``: each video's stem, made unique in input order.
-
-    The first ``traffic`` stays ``traffic``; later ones become ``traffic-2``, ``traffic-3``, ...
-    skipping any name already taken (also by a stem that itself ends in ``-2``). Names are
-    compared case-insensitively, so the folders differ on case-insensitive file systems too.
-
-    Examples
-    --------
-    >>> output_names(["a/cam.avi", "b/cam.avi", "cam-2.mp4", "c/cam.mp4"])
-    ['cam', 'cam-2', 'cam-2-2', 'cam-3']
-    """
-    stems = []
-    for video in videos:
-        text = os.fspath(video).rstrip("/\\")
-        stem = re.sub(r"[^\w.-]+", "_", Path(text).stem) if text else ""
-        stems.append(stem.strip(".") or "video")
-    taken: set[str] = set()
-    names: list[str] = []
-    for stem in stems:
-        name, n = stem, 1
-        while name.lower() in taken:
-            n += 1
-            name = f"{stem}-{n}"
-        taken.add(name.lower())
-        names.append(name)
-    return names
-
-
-# --------------------------------------------------------------------------- one video (worker)
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return text if isinstance(exc, (ValueError, OSError)) and text else (
-        f"{type(exc).__name__}: {text}" if text else type(exc).__name__
-    )
-
-
-def track_video(
-    video: str,
-    out: str,
-    settings: RunSettings,
-    *,
-    fps: float | None = None,
-    max_frames: int | None = None,
-    stop: str | None = None,
-) -> dict[str, Any]:
-    """Track one video into ``out`` exactly as ``mvtrack track`` does; never raises.
-
-    This is the Dask task of :func:`track_many` (it also runs on its own). OpenCV is limited
-    to one thread (``cv2.setNumThreads(1)``): the parallelism is one video per worker.
-
-    Parameters
-    ----------
-    video : str
-        Path or URL, opened with :func:`mvtrack.io.video.open_source`.
-    out : str
-        Output folder (``results.txt``, ``summary.json``, ``trajectories.png``, ``tracks.mp4``).
-    settings : RunSettings
-        As built by ``mvtrack track`` from its options; the size-dependent defaults are filled
-        in here for this video's size (:func:`mvtrack.pipeline.resolve_settings`).
-    fps : float, optional
-        Frame rate to assume instead of the source's.
-    max_frames : int, optional
-        Stop after this many frames.
-    stop : str, optional
-        Name of a :class:`distributed.Event` (in a Dask task only): once it is set, the frame
-        loop ends as on Ctrl-C and the files of the frames tracked so far are written, so an
-        interrupted batch keeps the partial results of the videos it was tracking.
-
-    Returns
-    -------
-    dict
-        The fields of :class:`BatchItem`. Errors (a missing or unreadable file, a source
-        that breaks off, a bad setting) become ``status="failed"`` with a one-line ``error``;
-        Ctrl-C in the worker becomes ``status="cancelled"`` with the frames done so far.
-    """
-    import cv2
-
-    from mvtrack import pipeline
-
-    cv2.setNumThreads(1)
-    t0 = time.perf_counter()
-    item = BatchItem(video=video, out=out, status="failed")
-    try:
-        if stop is None:
-            run = pipeline.track_video(
-                video, out, settings, fps=fps, max_frames=max_frames, progress=False
-            )
-        else:
-            run = _track_until_stopped(video, out, settings, fps, max_frames, _StopFlag(stop))
-    except KeyboardInterrupt:
-        item.status, item.error = "cancelled", "interrupted before any frame was tracked"
-    except Exception as exc:  # one video's failure must not end the batch
-        item.error = _one_line(exc)
-    else:
-        res, summary = run.result, run.summary
-        item.frames, item.tracks, item.fps = res.n_frames, int(summary["tracks"]), summary["fps"]
-        if res.interrupted:
-            item.status = "cancelled"
-            item.error = f"interrupted after {res.n_frames} frames; results so far are in {out}"
-        elif res.error is not None:
-            item.error = f"{' '.join(res.error.split())}; results so far are in {out}"
-        else:
-            item.status = "ok"
-    item.seconds = round(time.perf_counter() - t0, 3)
-    return item.as_dict()
-
-
-# --------------------------------------------------------------------------- many videos
-
-
-def _finished_on_disk(item: BatchItem, since: float) -> BatchItem | None:
-    """The item of a run whose result did not reach us but whose files did.
-
-    After Ctrl-C a video that was running may still complete before its worker stops; its
-    ``summary.json`` (written last, atomically) then shows a full run newer than ``since``.
-    """
-    import json
-
-    path = Path(item.out) / "summary.json"
-    try:
-        if path.stat().st_mtime < since:
-            return None
-        summary = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    if summary.get("ended_early", True) or summary.get("source") != item.video:
-        return None
-    return BatchItem(item.video, item.out, "ok", frames=int(summary["frames"]),
-                     tracks=int(summary["tracks"]), fps=summary.get("fps"),
-                     seconds=float(summary.get("seconds", 0.0)))
-
-
-class _StopFlag:
-    """A :class:`distributed.Event` looked at no more often than every ``every`` seconds."""
-
-    def __init__(self, name: str, every: float = 0.25) -> None:
-        from distributed import Event
-
-        self.event = Event(name)
-        self.every = every
-
-    def is_set(self) -> bool:
-        return bool(self.event.is_set())
-
-    def frames(self, frames: Iterable[Any]) -> Iterator[Any]:
-        """``frames`` until the event is set; then ``KeyboardInterrupt``, which the frame loop
-        takes as Ctrl-C (it writes what was tracked)."""
-        last = time.monotonic()
-        for frame in frames:
-            now = time.monotonic()
-            if now - last >= self.every:
-                last = now
-                if self.is_set():
-                    raise KeyboardInterrupt
-            yield frame
-
-
-def _track_until_stopped(video: str, out: str, settings: RunSettings, fps: float | None,
-                         max_frames: int | None, flag: _StopFlag) -> Any:
-    """:func:`mvtrack.pipeline.track_video` with its frames taken through ``flag``."""
-    from mvtrack import pipeline
-    from mvtrack.io.video import open_source
-
-    if flag.is_set():  # the batch was interrupted before this video started
-        raise KeyboardInterrupt
-    src = open_source(video, fps=fps)
-    with src:
-        resolved = pipeline.resolve_settings(settings, src.size)
-        parts = (pipeline.build_detector(resolved), pipeline.build_tracker(resolved, src.fps))
-        return pipeline.track_to_folder(
-            flag.frames(frame for _, frame in src), fps=src.fps, size=src.size,
-            settings=resolved, out=out, max_frames=max_frames, total=src.frame_count,
-            source=str(video), progress=False, parts=parts, source_error=lambda: src.error,
-        )
-
-
-#: the files :func:`mvtrack.pipeline.track_to_folder` writes (each through a temporary file)
-_OUTPUTS = ("results.txt", "summary.json", "trajectories.png", "tracks.mp4")
-
-
-def _remove_temp_files(folder: Path) -> None:
-    """Delete the temporary files a stopped worker left half-written in ``folder``."""
-    for name in _OUTPUTS:
-        for tmp in folder.glob(f".{glob.escape(name)}.*{Path(name).suffix}"):
-            with contextlib.suppress(OSError):
-                tmp.unlink()
 
 
 def check_settings(settings: RunSettings) -> None:
@@ -311,7 +64,7 @@ def check_settings(settings: RunSettings) -> None:
     ValueError
         Unknown preset, predictor, distance, assignment rule, detector or parameter.
     """
-    from mvtrack.pipeline import (
+    from mvtrack.video import (
         REFERENCE_SIZE,
         build_detector,
         build_rescuer,
@@ -476,7 +229,7 @@ def track_many(
             stop_name = f"mvtrack-batch-stop-{os.getpid()}-{time.time_ns()}"
             stop = Event(stop_name, client=client)
             futures = client.map(
-                track_video, sources, outs, settings=settings, fps=fps, max_frames=max_frames,
+                track_one, sources, outs, settings=settings, fps=fps, max_frames=max_frames,
                 stop=stop_name, pure=False,
             )
             index = {f.key: i for i, f in enumerate(futures)}
@@ -486,7 +239,7 @@ def track_many(
                     try:
                         items[i] = BatchItem(**future.result())
                     except Exception as exc:  # the worker died, or the task could not run
-                        items[i] = BatchItem(sources[i], outs[i], "failed", error=_one_line(exc))
+                        items[i] = BatchItem(sources[i], outs[i], "failed", error=one_line(exc))
                     bar.update(1)
                     save()
                     if on_result is not None:
@@ -512,10 +265,10 @@ def track_many(
         bar.close()
         for i, it in enumerate(items):
             if it.status == "pending":
-                items[i] = _finished_on_disk(it, since=started) or BatchItem(
+                items[i] = finished_on_disk(it, since=started) or BatchItem(
                     it.video, it.out, "cancelled", error="cancelled before it finished")
             if begun and items[i].status == "cancelled" and scheduler is None:
-                _remove_temp_files(Path(items[i].out))  # its worker was stopped mid-write
+                remove_temp_files(Path(items[i].out))  # its worker was stopped mid-write
         if begun:
             save()
     return items
@@ -582,9 +335,9 @@ def _connect(stack: contextlib.ExitStack, scheduler: str | None, n_workers: int,
     try:
         client = Client(scheduler, timeout=timeout)
     except (OSError, TimeoutError) as exc:
-        raise OSError(f"cannot connect to Dask scheduler {scheduler}: {_one_line(exc)}") from None
+        raise OSError(f"cannot connect to Dask scheduler {scheduler}: {one_line(exc)}") from None
     except ValueError as exc:
-        raise ValueError(f"bad scheduler address {scheduler!r}: {_one_line(exc)}") from None
+        raise ValueError(f"bad scheduler address {scheduler!r}: {one_line(exc)}") from None
     stack.enter_context(client)
     try:  # a cluster without workers would leave the batch waiting for ever
         client.wait_for_workers(1, timeout=timeout)

@@ -1,0 +1,227 @@
+"""Stopped vehicles: the tracker ↔ template bank glue (paper 1, SPEC §1.1 step 3).
+
+A vehicle that stops fades into the disturbance-map background and its blob vanishes; the
+tracker offers its confirmed tracks that got no detection to a ``rescue`` callback, and the
+ones found by template matching are held in state ``STOPPED``.
+:class:`~mvtrack.detection.template.TemplateBank` (arrays in, no tracker) keeps the
+appearances and does the NCC search; here :class:`TemplateRescuer` maps the tracker's output
+rows to its uids and feeds the bank, and :class:`StoppedVehicleRescuer` accepts only what a
+stopped vehicle looks like.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mvtrack.errors import InputError
+from mvtrack.types import Detections, TrackFrame
+from mvtrack.video.loop import RescueFn
+
+if TYPE_CHECKING:
+    from mvtrack.detection.template import TemplateBank
+
+Image = NDArray[np.uint8]
+IntArray = NDArray[np.int64]
+
+
+class StoppedVehicleRescuer:
+    """Template matching restricted to what a stopped vehicle looks like.
+
+    Paper 1 uses template matching for one case: a vehicle that *stopped* and faded into the
+    disturbance-map background (SPEC §1.1 step 3). A bare NCC search also "finds" other things,
+    and a track held that way never ends:
+
+    - a track that never moved (a ghost blob where a parked vehicle left, a pole flickering
+      under camera jitter) has a template of static scenery, which matches forever — the
+      template bank searches only tracks that have driven somewhere
+      (:class:`~mvtrack.detection.template.TemplateBank`, ``min_travel``);
+    - a duplicate track (two blobs of one two-tone vehicle) whose detection went to its twin
+      follows the moving vehicle by template, frame after frame.
+
+    So the search is centred on the track's last measured position, a match is accepted only
+    if it lies within ``max_shift`` px of it (a stopped vehicle stands where it was last seen),
+    and no detection of this frame covers the match (a detected object has not faded). All
+    checks are array operations over the missed tracks.
+
+    Parameters
+    ----------
+    inner : TemplateRescuer
+        The NCC search (:class:`TemplateRescuer`).
+    tracker : mvtrack.tracking.Tracker
+        Its ``tracks`` table gives each uid's last measurement.
+    max_shift : float
+        Largest distance (px) between the match and the last measured position.
+    """
+
+    #: default ``max_shift`` in px
+    MAX_SHIFT = 4.0
+
+    def __init__(self, inner: Any, tracker: Any, max_shift: float = MAX_SHIFT) -> None:
+        if not max_shift > 0:
+            raise InputError(f"template settings: max_shift must be > 0, got {max_shift}")
+        self.inner = inner
+        self.tracker = tracker
+        self.max_shift = float(max_shift)
+
+    def callback(self, image: Image, dets: Detections) -> RescueFn:
+        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for this frame."""
+        tab = self.tracker.tracks
+
+        def rescue(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any]:
+            search = self.inner.callback(image)  # only on frames with missed tracks
+            uids = np.asarray(uids, np.int64).reshape(-1)
+            # a stopped vehicle stands where it was last measured: search around that place,
+            # not around the prediction, which keeps drifting with the last velocity estimate
+            order = np.argsort(tab.uid)
+            at = order[np.searchsorted(tab.uid[order], uids)]
+            last = tab.last_xy[at]
+            f_sub, xy_sub = search(uids, last, wh)
+            found = np.array(f_sub, bool)
+            xy = np.array(xy_sub, np.float64)
+            if not found.any():
+                return found, xy
+            # the match must sit where the vehicle was last measured (it stands still)
+            d = xy - last
+            found &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
+            # and no detection may cover it (a detected object has not faded)
+            if len(dets) and found.any():
+                lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
+                inside = ((xy[:, None, :] >= lo[None]) & (xy[:, None, :] <= hi[None])).all(2)
+                found &= ~inside.any(axis=1)
+            xy[~found] = np.nan
+            return found, xy
+
+        return rescue
+
+    def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
+        """Feed the template bank."""
+        self.inner.observe(image, dets, tracks)
+
+
+def gate_radius_of(tracker: Any, default: float) -> float:
+    """The tracker's gate as a radius in px when its distance is Euclidean, else ``default``.
+
+    The radius is ``sqrt(r²)`` of the tracker's gates (:meth:`~mvtrack.tracking.Tracker.gates`),
+    the circle of a box up to ``size_ref``. Mahalanobis-type and IoU gates have no single
+    radius in pixels; there the bank's own ``gate_radius`` (paper 1's 20 px) is used.
+    """
+    config = getattr(tracker, "config", None)
+    if getattr(config, "distance", None) != "euclidean" or not hasattr(tracker, "gates"):
+        return default
+    r2 = tracker.gates().r2
+    return math.sqrt(float(r2)) if r2 else default
+
+
+class TemplateRescuer:
+    """Adapter between a :class:`TemplateBank` and ``Tracker.step(dets, rescue=...)``.
+
+    Per frame ``k``::
+
+        dets = detector(frame)
+        out = tracker.step(dets, rescue=rescuer.callback(frame))
+        rescuer.observe(frame, dets, out)
+
+    Parameters
+    ----------
+    bank : TemplateBank
+        The templates and the search parameters.
+    tracker : mvtrack.tracking.Tracker, optional
+        The tracker whose output is observed: needed to map the public IDs of its output rows
+        to the internal ``uid`` the rescue callback receives, and to forget deleted tracks.
+        May be given later with :meth:`attach`.
+    gate_radius : float, optional
+        Search radius in px; default: the tracker's gate radius for the Euclidean distance
+        (``sqrt(gate)``), else the bank's ``gate_radius``.
+    detector : FrontEnd, optional
+        The detection front end; its foreground ``mask`` after each frame restricts the
+        templates to the objects' own pixels (see :meth:`TemplateBank.observe`). Strongly
+        recommended: without it a template is the whole box, road included, and it can keep
+        matching the empty road after a pedestrian or vehicle has left.
+    max_radius : float, optional
+        Search no farther than this (px) from the centre the tracker gives, even if the gate
+        is wider. For a caller that accepts only matches this close (the pipeline's
+        ``max_shift`` around a stopped vehicle's last position) the rest of the gate is
+        wasted work: an NCC over a 20 px gate costs (2·20 + 1)² placements, over 4 px 9².
+    """
+
+    def __init__(
+        self,
+        bank: TemplateBank,
+        tracker: Any = None,
+        gate_radius: float | None = None,
+        detector: Any = None,
+        max_radius: float | None = None,
+    ) -> None:
+        if max_radius is not None and not max_radius >= 0:
+            raise ValueError(f"max_radius must be ≥ 0 px or None, got {max_radius}")
+        self.bank = bank
+        self.tracker = tracker
+        self.detector = detector
+        self._radius = gate_radius
+        self.max_radius = None if max_radius is None else float(max_radius)
+        self._tracker_radius: tuple[Any, float] | None = None  # (tracker, its gate radius)
+
+    def attach(self, tracker: Any) -> None:
+        """Use ``tracker`` (and forget templates of any previous one)."""
+        self.tracker = tracker
+        self.bank.clear()
+
+    @property
+    def gate_radius(self) -> float:
+        """The search radius in px (the gate, capped at ``max_radius``)."""
+        if self._radius is not None:
+            r = float(self._radius)
+        else:  # a tracker's gate does not change: read it once
+            if self._tracker_radius is None or self._tracker_radius[0] is not self.tracker:
+                radius = gate_radius_of(self.tracker, self.bank.gate_radius)
+                self._tracker_radius = (self.tracker, radius)
+            r = self._tracker_radius[1]
+        return r if self.max_radius is None else min(r, self.max_radius)
+
+    def callback(self, frame: Image) -> RescueFn:
+        """The ``rescue`` argument of ``tracker.step`` for ``frame``."""
+        return self.bank.bind(frame, self.gate_radius)
+
+    def observe(self, frame: Image, dets: Detections, tracks: TrackFrame) -> None:
+        """Record the detected boxes of this frame's tracks; forget deleted tracks.
+
+        Rows of ``tracks`` with ``det_index ≥ 0`` and a public ID are stored under the
+        tracker's internal uid (``tracker.row_uids``, row-aligned with its last output; or, for
+        a tracker without it, looked up through ``tracker.tracks`` by ``track_id``) with the
+        detection's box (the last detected appearance). Deleted tracks are forgotten once the
+        bank holds more tracks than the tracker has live ones (so at most twice as many).
+        """
+        if self.tracker is None:
+            raise ValueError("TemplateRescuer: attach a tracker before observing frames")
+        det = tracks.det_index
+        rows = det >= 0
+        if getattr(getattr(self.tracker, "config", None), "output_tentative", True):
+            rows &= tracks.track_id > 0  # tentative rows (ID −1) are output too
+        row_uids = getattr(self.tracker, "row_uids", None)
+        if row_uids is not None and len(row_uids) == len(det):
+            uids = row_uids[rows]
+            d = det[rows]
+        else:
+            uids, d = self._uids_by_id(tracks.track_id[rows], det[rows])
+        table = self.tracker.tracks
+        if self.bank.uids.size > len(table):  # some are dead: forget them
+            self.bank.retain(table.uid)
+        mask = getattr(self.detector, "mask", None) if self.detector is not None else None
+        self.bank.observe(frame, uids, dets.xy[d], dets.wh[d], mask)
+
+    def _uids_by_id(self, ids: IntArray, det: IntArray) -> tuple[IntArray, IntArray]:
+        """Internal uids of public ``ids`` through ``tracker.tracks`` (unknown ones dropped)."""
+        table = self.tracker.tracks
+        t_uid = np.asarray(table.uid, np.int64)
+        t_id = np.asarray(table.track_id, np.int64)
+        if not (t_id.size and ids.size):
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        order = np.argsort(t_id, kind="stable")
+        sorted_ids = t_id[order]
+        pos = np.minimum(np.searchsorted(sorted_ids, ids), t_id.size - 1)
+        ok = sorted_ids[pos] == ids
+        return t_uid[order][pos][ok], det[ok]

@@ -1,0 +1,268 @@
+"""Whole runs: a video in, an output folder out (results, annotated video, plots, summary).
+
+:func:`track_video` is what ``mvtrack track`` and each job of ``mvtrack batch`` run: it opens
+the source, fills in the size-dependent settings (:mod:`mvtrack.video.settings`), builds the
+parts (:mod:`mvtrack.video.build`) and calls :func:`track_to_folder`, which runs the frame loop
+(:func:`mvtrack.video.loop.run_frames`) and writes the files.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mvtrack.config import RunSettings
+from mvtrack.types import Detections, TrackFrame
+from mvtrack.video.build import build_detector, build_rescuer, build_tracker
+from mvtrack.video.loop import PipelineResult, run_frames
+from mvtrack.video.settings import resolve_settings
+
+Image = NDArray[np.uint8]
+
+
+@dataclass
+class RunOutput:
+    """A finished run: the loop's result, the files written and the summary."""
+
+    result: PipelineResult
+    log: Any  # mvtrack.tracking.TrackLog
+    summary: dict[str, Any]
+    paths: dict[str, Path]
+
+
+def _track_lengths(log: Any) -> NDArray[np.int64]:
+    ids = log.columns()["track_id"]
+    ids = ids[ids > 0]
+    return np.unique(ids, return_counts=True)[1] if ids.size else np.zeros(0, dtype=np.int64)
+
+
+def track_to_folder(
+    frames: Iterable[Image],
+    *,
+    fps: float,
+    size: tuple[int, int],
+    settings: RunSettings,
+    out: str | os.PathLike[str],
+    max_frames: int | None = None,
+    total: int | None = None,
+    source: str = "",
+    progress: bool | None = None,
+    parts: tuple[Any, Any] | None = None,
+    source_error: Callable[[], str | None] | None = None,
+    snapshot: int | None = None,
+) -> RunOutput:
+    """Track ``frames`` and write everything into the folder ``out``.
+
+    Files (each written atomically; a failure leaves no partial file):
+
+    - ``results.txt`` — MOTChallenge results (frame, id, left, top, w, h, conf, -1, -1, -1)
+      of the rows with a measurement (confirmed, or stopped and held by template matching);
+      coasting predictions are drawn in the video but not written;
+    - ``tracks.mp4`` — the annotated video (unless ``settings.video`` is False): boxes in
+      their state colour, IDs, trails and the gates the tracker applies to the next frame
+      (:meth:`~mvtrack.tracking.Tracker.gates`: ellipses or circles, stretched for large
+      boxes; the second stage's gates dimmer);
+    - ``trajectories.png`` — every track's path over the first frame;
+    - ``summary.json`` — frames, tracks, states histogram, ``processing_speed`` (frames
+      processed per second; ``video_fps`` is the frame rate), settings, ``ended_early``;
+    - ``frameNNNNN.png`` — one annotated frame, if ``snapshot`` is given.
+
+    Ctrl-C during the loop ends it early; the files are still written for the frames
+    processed (``summary["interrupted"]``).
+
+    Parameters
+    ----------
+    frames : iterable of (H, W, 3) uint8
+        The video.
+    fps : float
+        Frame rate of the video (converts the tracker's time-based parameters).
+    size : (W, H)
+        Frame size.
+    settings : RunSettings
+        Detector, tracker and output settings.
+    out : path
+        Output folder (created).
+    max_frames : int, optional
+        Stop after this many frames.
+    total : int, optional
+        Expected number of frames, for the progress bar.
+    source : str
+        Name of the video, for the summary.
+    progress : bool, optional
+        Force the progress bar on or off.
+    parts : (detector, tracker), optional
+        Ready-made parts instead of building them from ``settings``.
+    source_error : callable, optional
+        Asked after the loop why the source ended early (e.g. ``lambda: src.error`` of a
+        :class:`~mvtrack.io.video.FrameSource`); its answer goes to ``result.error``.
+    snapshot : int, optional
+        Also save the annotated frame with this index as ``frameNNNNN.png`` (lossless), with or
+        without the video.
+    """
+    import cv2
+
+    from mvtrack.io.atomic import atomic_path, write_json
+    from mvtrack.tracking import TrackLog
+    from mvtrack.viz.annotate import TrailBuffer, annotate_frame
+    from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
+
+    if parts is None:
+        settings = resolve_settings(settings, size)
+        detector, tracker = build_detector(settings), build_tracker(settings, fps)
+    else:
+        detector, tracker = parts
+    rescuer = build_rescuer(settings, tracker, detector) if settings.templates else None
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths: dict[str, Path] = {}
+    log = TrackLog()
+    background: list[Image] = []
+    config = tracker.config
+    label = f"{config.predictor} | {config.distance} | {config.assign}"
+
+    with contextlib.ExitStack() as stack:
+        writer = None
+        if settings.video:
+            dest = out / "tracks.mp4"
+            tmp = stack.enter_context(atomic_path(dest))
+            writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
+            if not writer.isOpened():
+                raise OSError(f"cannot write video {dest} (OpenCV has no MPEG-4 encoder)")
+            stack.callback(writer.release)  # runs before atomic_path renames the file
+            paths["video"] = dest
+        trails = TrailBuffer(settings.trail)
+
+        def on_frame(k: int, image: Image, dets: Detections, tracks: TrackFrame) -> None:
+            log.append(tracks)
+            if k == 0:
+                background.append(image.copy())
+            shot = snapshot is not None and k == snapshot
+            if writer is None and snapshot is None:
+                return
+            trails.push(tracks)
+            if writer is None and not shot:
+                return
+            gates: dict[str, Any] = {}
+            if settings.gates:  # the confirmed tracks' gates for the next frame
+                g = tracker.gates()
+                g = g.take(g.track_id > 0)
+                gates = {"gate_center": g.center, "gate_cov": g.shape, "gate_r2": g.r2,
+                         "outer_cov": g.second_shape, "outer_r2": g.second_r2}
+            text = [f"frame {k}  tracks {len(tracks)}", label]
+            img = annotate_frame(image, tracks, trails=trails, text=text, **gates)
+            if writer is not None:
+                writer.write(img)
+            if shot:
+                dest = out / f"frame{k:05d}.png"
+                with atomic_path(dest) as tmp_png:
+                    if not cv2.imwrite(str(tmp_png), img, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
+                        raise OSError(f"cannot write {dest}")
+                paths["snapshot"] = dest
+
+        result = run_frames(
+            frames, detector, tracker, rescuer=rescuer, max_frames=max_frames,
+            on_frame=on_frame, total=total, progress=progress,
+        )
+        if result.error is None and source_error is not None and not result.interrupted:
+            result.error = source_error()
+
+    paths["results"] = out / "results.txt"
+    log.write_mot(paths["results"], include_coasting=False)
+    rows = TrackRows.from_frames(log)
+    lengths = _track_lengths(log)
+    name = Path(source).name if source else "video"
+    fig = trajectory_figure(
+        rows, size, background[0] if background else None,
+        title=f"{name}: {len(lengths)} tracks ({label})",
+    )
+    paths["trajectories"] = out / "trajectories.png"
+    save_figure(fig, paths["trajectories"])
+    summary = {
+        "source": source,
+        "frames": result.n_frames,
+        "video_fps": fps,
+        "size": list(size),
+        "tracks": len(lengths),
+        "track_length_frames": {
+            "median": float(np.median(lengths)) if lengths.size else 0.0,
+            "max": int(lengths.max()) if lengths.size else 0,
+        },
+        "detections": result.n_detections,
+        "states": rows.state_histogram(),
+        "processing_speed": round(result.processing_speed, 2) if result.n_frames else None,
+        "seconds": round(result.seconds, 3),
+        "ended_early": result.ended_early,
+        "interrupted": result.interrupted,
+        "error": result.error,
+        "settings": settings.as_dict(),
+        "tracker": _config_dict(config),
+        "files": {k: v.name for k, v in paths.items()},
+    }
+    paths["summary"] = out / "summary.json"
+    summary["files"]["summary"] = "summary.json"
+    write_json(paths["summary"], summary)
+    return RunOutput(result, log, summary, paths)
+
+
+def _config_dict(config: Any) -> dict[str, Any]:
+    out = {}
+    for f in dataclasses.fields(config):
+        value = getattr(config, f.name)
+        out[f.name] = dict(value) if isinstance(value, Mapping) else value
+    return out
+
+
+def track_video(
+    video: str | int,
+    out: str | os.PathLike[str],
+    settings: RunSettings,
+    *,
+    fps: float | None = None,
+    max_frames: int | None = None,
+    progress: bool | None = None,
+    snapshot: int | None = None,
+) -> RunOutput:
+    """Open ``video``, build its parts for its size and frame rate, and :func:`track_to_folder`.
+
+    What ``mvtrack track`` and each job of ``mvtrack batch`` run. Everything that can be wrong
+    with the source or the settings fails before any file is written.
+
+    Parameters
+    ----------
+    video : str or int
+        Video file, image folder, camera index or stream URL (see
+        :func:`mvtrack.io.video.open_source`).
+    out : path
+        Output folder.
+    settings : RunSettings
+        Settings as the user gave them; the size-dependent defaults are filled in here
+        (:func:`resolve_settings`).
+    fps : float, optional
+        Frame rate to assume instead of the source's.
+    max_frames, progress, snapshot
+        As in :func:`track_to_folder`.
+
+    Raises
+    ------
+    InputError
+        Missing, unreadable or empty source; bad settings.
+    """
+    from mvtrack.io.video import open_source
+
+    src = open_source(video, fps=fps)
+    with src:
+        resolved = resolve_settings(settings, src.size)
+        parts = (build_detector(resolved), build_tracker(resolved, src.fps))
+        return track_to_folder(
+            (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
+            out=out, max_frames=max_frames, total=src.frame_count, source=str(video),
+            progress=progress, parts=parts, source_error=lambda: src.error, snapshot=snapshot,
+        )

@@ -1,0 +1,197 @@
+"""One TOML file for tracking and analytics: ``mvtrack track --config`` with an [analytics]
+table writes the analytics CSV files beside results.txt; a bad analytics key stops the run
+before any tracking."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from mvtrack.analytics.outputs import read_table
+from mvtrack.cli import main
+from mvtrack.config import load_config
+from mvtrack.errors import InputError
+
+SCENE = """\
+[tracker]
+preset = "default"
+
+[analytics]
+interval = 1
+min_frames = 5
+
+[analytics.calibration]
+metres_per_pixel = 0.5
+
+[analytics.lines.middle]
+points = [[48, 0], [48, 64]]
+hysteresis = 3
+labels = ["westbound", "eastbound"]
+"""
+
+
+def _box_video(path: Path, n: int = 40, speed: int = 2) -> Path:
+    """A small MJPG video (15 fps) with one bright box moving right at ``speed`` px/frame."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15, (96, 64))
+    assert writer.isOpened()
+    for k in range(n):
+        img = np.full((64, 96, 3), 80, np.uint8)
+        if k >= 5:
+            x = 6 + speed * (k - 5)
+            img[28:36, x : x + 10] = 230
+        writer.write(img)
+    writer.release()
+    return path
+
+
+def test_config_keeps_the_analytics_table(tmp_path: Path) -> None:
+    f = tmp_path / "scene.toml"
+    f.write_text(SCENE)
+    s = load_config(f)
+    assert s.tracker == {"preset": "default"}
+    assert s.analytics is not None and s.analytics["lines"]["middle"]["hysteresis"] == 3
+    f.write_text("[tracker]\npreset = \"default\"\n")
+    assert load_config(f).analytics is None
+
+
+@pytest.mark.parametrize("text, key", [
+    ("[analytics]\nintervall = 5\n", "analytics.intervall"),
+    ("[analytics.lines.a]\npoints = [[0, 0]]\n", "analytics.lines.a.points"),
+])
+def test_config_refuses_a_bad_analytics_key(tmp_path: Path, text: str, key: str) -> None:
+    f = tmp_path / "scene.toml"
+    f.write_text(text)
+    with pytest.raises(InputError) as err:
+        load_config(f)
+    assert key in str(err.value) and str(f) in str(err.value)
+
+
+def test_track_with_analytics_table_writes_counts(tmp_path: Path) -> None:
+    video = _box_video(tmp_path / "box.avi")
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text(SCENE)
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--no-video",
+                 "--config", str(cfg)]) == 0
+    for name in ("results.txt", "counts.csv", "movements.csv", "speeds.csv", "tracks.csv"):
+        assert (out / name).exists(), name
+    counts = read_table(out / "counts.csv")
+    got: dict[str, int] = {}
+    for el, d, n in zip(counts["element"], counts["direction"], counts["count"], strict=True):
+        if el == "line":
+            got[d] = got.get(d, 0) + int(n)
+    # the box moves +x: across a line whose a -> b points down, from its right to its left
+    assert got == {"westbound": 0, "eastbound": 1}
+    tracks = read_table(out / "tracks.csv")
+    counted = [i for i, c in enumerate(tracks["counted"]) if c == "1"]
+    assert len(counted) == 1 and tracks["crossings"][counted[0]] == "middle:eastbound"
+
+
+def test_track_writes_every_rows_state_and_evidence(tmp_path: Path) -> None:
+    from mvtrack.io.mot import read_tracks
+
+    video = _box_video(tmp_path / "box.avi", n=30)
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--no-video"]) == 0
+    st = read_table(out / "states.csv")
+    res = read_tracks(out / "results.txt", "results")
+    pairs = {(int(f), int(i)) for f, i, s in zip(st["frame"], st["id"], st["state"],
+                                                 strict=True) if s != "coasting"}
+    # results.txt leaves out the coasting rows: every other row has its state in states.csv
+    assert pairs == set(zip((res.frame + 1).tolist(), res.id.tolist(), strict=True))
+    assert len(pairs) == len(res.frame)
+    ok = {("confirmed", "detection"), ("stopped", "template"), ("coasting", "prediction")}
+    assert set(zip(st["state"], st["evidence"], strict=True)) <= ok
+    speed = np.array([float(v) for v in st["speed_px_per_frame"]])
+    assert np.median(speed) > 1.0  # the box moves 2 px/frame
+
+
+def test_track_stops_before_tracking_on_a_bad_analytics_key(tmp_path: Path, capsys) -> None:
+    video = _box_video(tmp_path / "box.avi")
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text("[analytics.calibration]\nmetres_per_pixel = -1\n")
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--no-video",
+                 "--config", str(cfg)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "analytics.calibration" in err[0]
+    assert not (out / "results.txt").exists()
+
+
+def _queue_files(tmp_path: Path, drop: int | None) -> tuple[Path, Path, Path, dict[str, int]]:
+    """gt.txt of the stop-and-go scene, a results file of its visible rows with the IDs
+    renumbered (and object ``drop`` left out), and its [analytics] TOML."""
+    import json
+
+    from mvtrack.analytics.accuracy import truth_movement_counts
+    from mvtrack.io.mot import write_mot, write_results
+    from mvtrack.sim.queue import queue_scene, queue_settings
+
+    sc = queue_scene(0)
+    gt = write_mot(tmp_path / "gt.txt", sc.gt_mot(), "gt")
+    vis = sc.visible & (sc.id != (drop if drop is not None else -1))
+    rows = np.column_stack([sc.frame[vis] + 1, 100 + sc.id[vis],
+                            sc.xy[vis] - sc.wh[vis] / 2, sc.wh[vis], np.ones(vis.sum())])
+    pred_dir = tmp_path / "run"
+    pred_dir.mkdir()
+    pred = write_results(pred_dir / "results.txt", rows)
+    (pred_dir / "summary.json").write_text(json.dumps({"frames": sc.n_frames,
+                                                       "video_fps": 30.0}))
+    q = queue_settings()
+    lines = ["[analytics]", "interval = 10", "min_frames = 10",
+             "[analytics.calibration]", "metres_per_pixel = 0.25"]
+    for group in ("approaches", "zones"):
+        for name, spec in q[group].items():
+            lines += [f"[analytics.{group}.{name}]", f"polygon = {spec['polygon']}"]
+    for name, spec in q["lines"].items():
+        lines += [f"[analytics.lines.{name}]", f"points = {spec['points']}",
+                  f"hysteresis = {spec['hysteresis']}", f"labels = {json.dumps(spec['labels'])}"]
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text("\n".join(lines) + "\n")
+    truth = truth_movement_counts(sc.meta["origin"], sc.meta["destination"])
+    return gt, pred, cfg, truth
+
+
+def test_eval_config_counts_and_speeds_against_truth(tmp_path: Path) -> None:
+    import json
+
+    gt, pred, cfg, truth = _queue_files(tmp_path, drop=3)
+    out = tmp_path / "scores.json"
+    assert main(["eval", "--gt", str(gt), "--pred", str(pred), "--config", str(cfg),
+                 "--json", str(out)]) == 0
+    acc = json.loads(out.read_text())["analytics"]
+    mv = acc["movements"]
+    # the ground truth's own tracks give the scene's true movements
+    assert {k: v["truth"] for k, v in mv.items() if k != "total" and v["truth"]} == truth
+    # object 3 is missing from the results: exactly its movement is one short
+    wrong = {k: v["error"] for k, v in mv.items() if k != "total" and v["error"]}
+    assert list(wrong.values()) == [-1] and mv["total"]["abs_error"] == 1
+    assert acc["lines"]["stopline:eastbound"]["truth"] == 10
+    assert acc["lines"]["stopline:eastbound"]["error"] == -1
+    # the results' rows are the truth's own boxes: every speed equals the true one
+    assert acc["speed"]["rows"] > 1000 and acc["speed"]["rmse_kmh"] < 1e-6
+
+
+def test_eval_config_folder_refused(tmp_path: Path, capsys) -> None:
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text("[analytics]\ninterval = 10\n")
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    assert main(["eval", "--gt", str(tmp_path / "a"), "--pred", str(tmp_path / "b"),
+                 "--config", str(cfg)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--config" in err[0]
+
+
+def test_x5_example_file_holds_the_x5_approaches() -> None:
+    from mvtrack.analytics import load_settings, settings_from_dict
+    from mvtrack.analytics.accuracy import x5_settings
+
+    doc = load_settings(Path(__file__).parent.parent / "docs" / "analytics-x5.toml")
+    ref = settings_from_dict(x5_settings())
+    assert [a.name for a in doc.approaches] == [a.name for a in ref.approaches]
+    for a, b in zip(doc.approaches, ref.approaches, strict=True):
+        np.testing.assert_allclose(np.asarray(a.polygon), np.asarray(b.polygon))
