@@ -258,3 +258,37 @@ def test_interrupted_batch_keeps_the_partial_results_of_the_video_being_tracked(
     assert not [p for p in folder.iterdir() if p.name.startswith(".")]
     data = json.loads((tmp_path / "out" / "batch.json").read_text())
     assert data["interrupted"] is True and data["cancelled"] == 1 and data["ok"] == 1
+
+
+@pytest.mark.parametrize("sig, status, word", [(signal.SIGTERM, 143, "terminated"),
+                                               (signal.SIGINT, 130, "interrupted")])
+def test_a_signal_in_track_detections_writes_the_frames_tracked(tmp_path, capsys, monkeypatch,
+                                                                sig, status, word) -> None:
+    """The signal arrives while frame 10 is tracked (sent by the process to itself): the run
+    ends after that frame and its results file holds frames 1..11, whole."""
+    import mvtrack.tracking as tracking
+    from mvtrack.io.mot import write_detections
+    from mvtrack.types import Detections
+
+    det = tmp_path / "det.txt"
+    write_detections(det, [Detections(k, [[10.0 + 2 * k, 50.0]], [[20.0, 40.0]])
+                           for k in range(40)])
+    real = tracking.track_detections
+
+    def signalling(frames, config):
+        def frames_sending():
+            for k, d in enumerate(frames):
+                if k == 10:
+                    os.kill(os.getpid(), sig)
+                yield d
+
+        return real(frames_sending(), config)
+
+    monkeypatch.setattr(tracking, "track_detections", signalling)
+    before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+    assert main(["track-detections", str(det), "--out", str(tmp_path / "o")]) == status
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith(f"error: {word} after 11 of 40 frames"), err
+    rows = np.loadtxt(tmp_path / "o" / "det.txt", delimiter=",", ndmin=2)
+    assert rows.shape == (11, 10) and rows[:, 0].tolist() == list(range(1, 12))

@@ -16,6 +16,7 @@ import signal
 import threading
 from collections.abc import Iterator
 from types import FrameType
+from typing import Any
 
 #: exit status of a command ended by SIGTERM (128 + 15, as a shell reports it)
 EXIT_TERMINATED = 128 + signal.SIGTERM
@@ -77,3 +78,46 @@ def interrupt_status() -> int:
 def interrupt_word() -> str:
     """``terminated`` after a SIGTERM, else ``interrupted``."""
     return "terminated" if terminated() else "interrupted"
+
+
+class Deferred:
+    """What :func:`deferred` hands out: whether a signal asked the loop to stop."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+
+    @property
+    def requested(self) -> bool:
+        """A SIGINT or SIGTERM arrived."""
+        return self.signum is not None
+
+    def until(self, items: Iterator[Any] | Any) -> Iterator[Any]:
+        """``items`` one by one, until a signal arrives (checked before each item)."""
+        for item in items:
+            if self.requested:
+                return
+            yield item
+
+
+@contextlib.contextmanager
+def deferred() -> Iterator[Deferred]:
+    """Inside the block, SIGINT and SIGTERM only ask the loop to stop (:meth:`Deferred.until`)
+    between two items, so a run over frames ends at a frame boundary with what it did, and its
+    results are written whole (main thread only; elsewhere the block changes nothing)."""
+    stop = Deferred()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        if signum == signal.SIGTERM:
+            _received.set()
+        if stop.signum is None:
+            stop.signum = signum
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
