@@ -141,6 +141,24 @@ def test_mog2_detects_a_moving_square_after_learning_the_background() -> None:
     assert hits == 40
 
 
+def test_knn_detects_a_moving_square_and_not_the_static_background() -> None:
+    from mvtrack.detection import KNN
+
+    knn = make_detector("knn", min_area=5)
+    assert isinstance(knn, KNN) and knn.blobs.min_area == 5
+    hits = false = 0
+    for k, frame, tl in _scene(80, _moving):
+        dets = knn(frame)
+        if k >= 40:
+            x, y = tl
+            d = np.hypot(*(dets.xy - [x + 4.5, y + 4.5]).T)
+            hits += bool(len(dets)) and d.min() <= 2.0
+            false += int((d > 2.0 * SIDE).sum()) if len(dets) else 0
+    assert hits == 40 and false == 0, (hits, false)
+    with pytest.raises(ValueError, match="dist2_threshold"):
+        make_detector("knn", dist2_threshold=0)
+
+
 def test_reset_forgets_the_background() -> None:
     dm = DisturbanceMap()
     frames = list(_scene(40, _moving))
@@ -224,7 +242,7 @@ def test_factory_rejects_unknown_names_and_parameters() -> None:
         make_detector("optical-flow")
     with pytest.raises(ValueError, match="tresh"):
         make_detector("disturbance-map", tresh=3)
-    assert set(DETECTORS) == {"disturbance-map", "frame-diff", "mog2", "scene"}
+    assert set(DETECTORS) == {"disturbance-map", "frame-diff", "mog2", "knn", "hog", "scene"}
     dm = make_detector("disturbance-map", threshold=30, beta_min=0.05, min_area=5, close_size=7)
     assert (dm.threshold, dm.beta_min, dm.blobs.min_area, dm.blobs.close_size) == (30, 0.05, 5, 7)
 

@@ -8,14 +8,23 @@ import pytest
 from mvtrack import registry
 from mvtrack.association import assign
 from mvtrack.cli import main
-from mvtrack.detection import FrontEnd, make_detector
+from mvtrack.detection import DETECTORS, FrontEnd, make_detector
+from mvtrack.types import Detections
+
+#: the registered front ends with a background model (the others detect objects in each frame)
+BACKGROUND = [n for n in registry.DETECTORS if issubclass(DETECTORS[n], FrontEnd)]
 
 
-@pytest.mark.parametrize("name", list(registry.DETECTORS))
-def test_every_registered_detector_is_built_by_name_and_detects(name: str) -> None:
+def test_the_registry_is_the_list_of_detectors() -> None:
+    assert list(DETECTORS) == list(registry.DETECTORS)
+    assert {"disturbance-map", "frame-diff", "mog2", "knn"} <= set(BACKGROUND)
+    assert "hog" in registry.DETECTORS and "hog" not in BACKGROUND
+
+
+@pytest.mark.parametrize("name", BACKGROUND)
+def test_every_registered_background_model_is_built_by_name_and_detects(name: str) -> None:
     det = make_detector(name)
-    # the blob front ends share FrontEnd; the scene front end is a callable of its own
-    assert isinstance(det, FrontEnd) or name == "scene"
+    assert isinstance(det, FrontEnd)
     rng = np.random.default_rng(0)
     road = np.full((60, 80, 3), 90.0)
     for _ in range(40):  # the empty road: every model learns it
@@ -24,6 +33,16 @@ def test_every_registered_detector_is_built_by_name_and_detects(name: str) -> No
     frame[20:30, 30:45] = 220
     dets = det((frame + rng.normal(0, 2, road.shape)).astype(np.uint8))
     assert len(dets) == 1 and np.abs(dets.xy[0] - (37.0, 24.5)).max() <= 1.0
+
+
+@pytest.mark.parametrize("name", [n for n in registry.DETECTORS if n not in BACKGROUND])
+def test_every_other_registered_detector_is_built_by_name_and_runs(name: str) -> None:
+    det = make_detector(name)
+    road = np.full((60, 80, 3), 90, np.uint8)  # smaller than HOG's 64x128 window
+    dets = det(road, 7)
+    assert isinstance(dets, Detections) and dets.frame == 7 and len(dets) == 0
+    big = np.full((240, 320, 3), 90, np.uint8)
+    assert len(det(big, 8)) == 0  # a plain wall is not a person
 
 
 @pytest.mark.parametrize("rule", list(registry.ASSIGN_RULES))
@@ -36,7 +55,9 @@ def test_every_registered_rule_assigns(rule: str) -> None:
 
 
 def test_unknown_names_are_refused_with_the_registered_ones() -> None:
-    with pytest.raises(ValueError, match="choose one of: disturbance-map, frame-diff, mog2"):
+    with pytest.raises(
+        ValueError, match="choose one of: disturbance-map, frame-diff, mog2, knn, hog"
+    ):
         make_detector("yolo")
     with pytest.raises(ValueError, match="nearest, greedy, optimal"):
         assign(np.array([0]), np.array([0]), np.array([1.0]), 1, 1, "hungarian")

@@ -46,6 +46,14 @@ DETECTORS: dict[str, Choice] = {
         "mvtrack.detection.background:FrameDifference",
     ),
     "mog2": Choice("OpenCV's Gaussian mixture model", "mvtrack.detection.background:MOG2"),
+    "knn": Choice(
+        "OpenCV's k-nearest-neighbours background subtractor",
+        "mvtrack.detection.background:KNN",
+    ),
+    "hog": Choice(
+        "OpenCV's HOG people detector over the whole frame (no background model)",
+        "mvtrack.detection.hog:HOGDetector",
+    ),
     "scene": Choice(
         "per-pixel background, shadows, size prior, blobs split with the tracker",
         "mvtrack.detection.scene:SceneDetector",

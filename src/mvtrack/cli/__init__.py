@@ -2,7 +2,9 @@
 
 Every command lives in its own module and registers itself here. User errors
 (:class:`~mvtrack.errors.InputError`, ``ValueError``, ``OSError``) and usage errors end in one
-line ``error: ...`` on stderr and exit status 2; Ctrl-C ends with status 130.
+line ``error: ...`` on stderr and exit status 2; Ctrl-C ends with status 130, SIGTERM (as
+``timeout``, ``docker stop`` or a batch scheduler send it) the same way with status 143
+(:mod:`mvtrack.cli._signals`).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from typing import Annotated
 import typer
 
 from mvtrack.cli import (
+    _signals,
     batch,
     demo,
     evaluate,
@@ -72,6 +75,21 @@ _CLICK_ERROR: type[Exception] = next(
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``mvtrack`` console script; returns the exit status."""
+    with _signals.sigterm_as_interrupt():
+        try:
+            status = _run(argv)
+        except KeyboardInterrupt:  # a signal after the command returned
+            status = _signals.EXIT_INTERRUPTED
+        if status == _signals.EXIT_INTERRUPTED:
+            # Typer turns an interrupt outside a command's own handling into a silent
+            # exit status 130; say what happened in one line
+            if not _signals.was_reported():
+                print(f"error: {_signals.interrupt_word()}", file=sys.stderr)
+            status = _signals.interrupt_status()
+        return status
+
+
+def _run(argv: list[str] | None) -> int:
     command = typer.main.get_command(app)
     try:
         with one_line_warnings():
@@ -80,14 +98,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc.format_message()}", file=sys.stderr)  # type: ignore[attr-defined]
         return 2
     except KeyboardInterrupt:
-        print("error: interrupted", file=sys.stderr)
-        return 130
+        return _signals.EXIT_INTERRUPTED
     except Exception as exc:
         if type(exc).__name__ == "Exit":
             return int(getattr(exc, "exit_code", 0))
         if type(exc).__name__ == "Abort":
-            print("error: interrupted", file=sys.stderr)
-            return 130
+            return _signals.EXIT_INTERRUPTED
         if isinstance(exc, (ValueError, OSError)):
             print(f"error: {exc}", file=sys.stderr)
             return 2

@@ -132,8 +132,10 @@ def register(app: typer.Typer) -> None:
         video).
 
         Exit status 0 when every video succeeded, 1 when some failed (one line each on
-        stderr), 2 for bad usage, 130 after Ctrl-C (pending videos are cancelled).
+        stderr), 2 for bad usage, 130 after Ctrl-C and 143 after SIGTERM (pending videos
+        are cancelled).
         """
+        from mvtrack.cli import _signals
         from mvtrack.video.batch import track_many
 
         if workers is not None and workers < 1:
@@ -172,7 +174,9 @@ def register(app: typer.Typer) -> None:
         for it in failed:
             print(f"error: {it.video}: {it.error}", file=sys.stderr)
         if cancelled:
-            print(f"error: interrupted; {len(cancelled)} videos cancelled", file=sys.stderr)
-            raise typer.Exit(130)
+            print(f"error: {_signals.interrupt_word()}; {len(cancelled)} videos cancelled",
+                  file=sys.stderr)
+            _signals.reported()
+            raise typer.Exit(_signals.interrupt_status())
         if failed:
             raise typer.Exit(1)

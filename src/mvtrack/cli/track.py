@@ -57,8 +57,10 @@ def register(app: typer.Typer) -> None:
         into --out; with an [analytics] table in --config, also counts.csv, movements.csv,
         speeds.csv and tracks.csv.
 
-        Ctrl-C stops early and still writes what was tracked (exit status 130).
+        Ctrl-C stops early and still writes what was tracked (exit status 130); so does
+        SIGTERM (exit status 143).
         """
+        from mvtrack.cli import _signals
         from mvtrack.errors import InputError
         from mvtrack.video import track_video
 
@@ -94,9 +96,11 @@ def register(app: typer.Typer) -> None:
                 typer.echo(f"  {path}")
         if res.interrupted:
             print(
-                f"error: interrupted after {res.n_frames} frames; results so far are in {out}",
+                f"error: {_signals.interrupt_word()} after {res.n_frames} frames; "
+                f"results so far are in {out}",
                 file=sys.stderr,
             )
-            raise typer.Exit(130)
+            _signals.reported()
+            raise typer.Exit(_signals.interrupt_status())
         if res.error is not None:
             raise InputError(f"{res.error}; results so far are in {out}")

@@ -89,6 +89,7 @@ def register(app: typer.Typer) -> None:
         from tqdm import tqdm
 
         from mvtrack.association import DISTANCES
+        from mvtrack.cli import _signals
         from mvtrack.filters.predictors import PREDICTORS
         from mvtrack.io.mot import read_detections
         from mvtrack.registry import ASSIGN_RULES
@@ -117,18 +118,26 @@ def register(app: typer.Typer) -> None:
         frames = read_detections(detfile)
         t0 = time.perf_counter()
         bar = tqdm(frames, desc="tracking", unit="frame", disable=not sys.stderr.isatty())
-        log = track_detections(bar, config)
+        # Ctrl-C and SIGTERM end the run at a frame boundary; what was tracked is written
+        with _signals.deferred() as stop:
+            log = track_detections(stop.until(bar), config)
+        bar.close()
         seconds = time.perf_counter() - t0
         dest = out / results_name(detfile)
         log.write_mot(dest, include_coasting=coasting)
-        n_dets = sum(len(d) for d in frames)
-        ms = 1000.0 * seconds / max(len(frames), 1)
+        done = len(log)
+        ms = 1000.0 * seconds / max(done, 1)
         typer.echo(
-            f"{len(frames)} frames, {n_dets} detections -> {log.track_ids.size} tracks, "
-            f"{len(log.to_mot(coasting))} rows ({config.predictor}, {config.distance}, "
+            f"{done} frames, {frames.num_detections} detections -> {log.track_ids.size} "
+            f"tracks, {len(log.to_mot(coasting))} rows ({config.predictor}, {config.distance}, "
             f"{config.assign}; {ms:.2f} ms/frame) -> {dest}"
         )
         typer.echo(f"rows written: {output_policy(config, coasting)}")
+        if stop.requested:
+            print(f"error: {_signals.interrupt_word()} after {done} of {len(frames)} frames; "
+                  f"the tracks of those frames are in {dest}", file=sys.stderr)
+            _signals.reported()
+            raise typer.Exit(_signals.interrupt_status())
 
 
 def parse_score_scale(text: str) -> str | tuple[float, float]:

@@ -230,3 +230,67 @@ class MOG2(FrontEnd):
             self._fg = np.empty_like(raw)
         cv2.compare(raw, 127, cv2.CMP_GT, dst=self._fg)
         return self._fg
+
+
+class KNN(FrontEnd):
+    """OpenCV's k-nearest-neighbours background subtractor
+    (``cv2.createBackgroundSubtractorKNN``), shadows discarded as in :class:`MOG2`.
+
+    Parameters
+    ----------
+    history : int, default 500
+        Frames of history (OpenCV's default).
+    dist2_threshold : float, default 400
+        Squared distance to a sample under which a pixel counts as close to it (OpenCV's
+        default).
+    detect_shadows : bool, default True
+        Mark and discard shadows.
+    learning_rate : float, default -1
+        OpenCV's learning rate; negative chooses it from ``history``.
+    use_color : bool, default True
+        Model the BGR frame (True) or its luminance (False).
+    warmup, **blob
+        As in :class:`DisturbanceMap`.
+    """
+
+    name = "knn"
+
+    def __init__(
+        self,
+        history: int = 500,
+        dist2_threshold: float = 400.0,
+        detect_shadows: bool = True,
+        learning_rate: float = -1.0,
+        use_color: bool = True,
+        *,
+        warmup: int = 0,
+        **blob: Any,
+    ) -> None:
+        if history < 1:
+            raise ValueError(f"history must be ≥ 1 frame, got {history}")
+        if not dist2_threshold > 0:
+            raise ValueError(f"dist2_threshold must be positive, got {dist2_threshold}")
+        super().__init__(BlobExtractor(**blob), warmup)
+        self.history = int(history)
+        self.dist2_threshold = float(dist2_threshold)
+        self.detect_shadows = bool(detect_shadows)
+        self.learning_rate = float(learning_rate)
+        self.use_color = bool(use_color)
+        self._reset_model()
+
+    def _reset_model(self) -> None:
+        self._model = cv2.createBackgroundSubtractorKNN(
+            history=self.history,
+            dist2Threshold=self.dist2_threshold,
+            detectShadows=self.detect_shadows,
+        )
+        self._fg: NDArray[np.uint8] | None = None
+
+    def foreground(self, frame: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        """KNN's mask with shadows (127) removed: 255 where foreground."""
+        img = frame if self.use_color else luminance(frame)
+        raw = self._model.apply(img, learningRate=self.learning_rate)
+        if self._fg is None or self._fg.shape != raw.shape:
+            self._fg = np.empty_like(raw)
+        cv2.compare(raw, 127, cv2.CMP_GT, dst=self._fg)
+        return self._fg

@@ -11,7 +11,7 @@ from mvtrack.detection.blobs import BlobExtractor
 
 #: Front-end names accepted by :func:`make_detector` (:data:`mvtrack.registry.DETECTORS`), and
 #: their classes.
-DETECTORS: dict[str, type[FrontEnd]] = {
+DETECTORS: dict[str, type[Any]] = {
     name: registry.load(choice) for name, choice in registry.DETECTORS.items()
 }
 
@@ -23,10 +23,15 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
     ----------
     name : str
         ``"disturbance-map"`` (paper 1, the default of the pipeline), ``"frame-diff"`` (the
-        baseline paper 1 rejects) or ``"mog2"`` (OpenCV's mixture model).
+        baseline paper 1 rejects), ``"mog2"`` (OpenCV's mixture model), ``"knn"`` (OpenCV's
+        k-nearest-neighbours subtractor) or ``"hog"`` (OpenCV's HOG people detector over the
+        whole frame; no background model).
     **params
         Constructor parameters of the class (see :class:`DisturbanceMap`,
-        :class:`FrameDifference`, :class:`MOG2`); names use underscores (``min_area``).
+        :class:`FrameDifference`, :class:`MOG2`, :class:`KNN`,
+        :class:`~mvtrack.detection.hog.HOGDetector`);
+        names use underscores (``min_area``). The blob stage's parameters
+        (:class:`BlobExtractor`) apply to the background-model front ends only.
 
     Raises
     ------
@@ -38,7 +43,9 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
     cls = DETECTORS[name]
     known = {
         p.name for p in inspect.signature(cls).parameters.values() if p.kind != p.VAR_KEYWORD
-    } | set(inspect.signature(BlobExtractor).parameters)
+    }
+    if issubclass(cls, FrontEnd):
+        known |= set(inspect.signature(BlobExtractor).parameters)
     unknown = sorted(set(params) - known)
     if unknown:
         raise ValueError(

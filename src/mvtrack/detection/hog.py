@@ -45,13 +45,25 @@ class HOGDetector:
         SVM margin a window needs.
     win_stride : int, default 8
         Window step, pixels.
+    min_area : float, default 0
+        Boxes of a smaller area (px²) are dropped. ``mvtrack track`` fills in its blob stage's
+        size-dependent ``min_area`` for every front end; a person's HOG box (at least the
+        64×128 window) is far larger.
+    close_size : int or None
+        Accepted for the same reason and unused: HOG has no foreground mask to close.
     """
 
     name = "hog"
 
-    def __init__(self, scale: float = 1.05, hit_threshold: float = 0.0, win_stride: int = 8):
+    def __init__(self, scale: float = 1.05, hit_threshold: float = 0.0, win_stride: int = 8,
+                 min_area: float = 0.0, close_size: int | None = None):
         if not scale > 1.0:
             raise ValueError(f"scale must be > 1, got {scale}")
+        if not (np.isfinite(min_area) and min_area >= 0):
+            raise ValueError(f"min_area must be a non-negative number, got {min_area}")
+        if not win_stride >= 1:
+            raise ValueError(f"win_stride must be at least 1, got {win_stride}")
+        self.min_area = float(min_area)
         self.scale = float(scale)
         self.hit_threshold = float(hit_threshold)
         self.win_stride = int(win_stride)
@@ -62,6 +74,10 @@ class HOGDetector:
         """People found in ``frame``; the score is the SVM margin."""
         k = self.frames_seen if index is None else int(index)
         self.frames_seen += 1
+        if frame.shape[0] < WINDOW[1] or frame.shape[1] < WINDOW[0]:
+            # no window fits (the pyramid only shrinks the frame); OpenCV 5.0's
+            # detectMultiScale also corrupts memory on such frames (e.g. 100x200 crashes)
+            return Detections.empty(k)
         rects, weights = self._hog.detectMultiScale(
             frame,
             hitThreshold=self.hit_threshold,
@@ -71,7 +87,9 @@ class HOGDetector:
         if len(rects) == 0:
             return Detections.empty(k)
         r = np.asarray(rects, np.float64).reshape(-1, 4)
-        return Detections.from_tlwh(k, r, np.asarray(weights, np.float64).reshape(-1))
+        score = np.asarray(weights, np.float64).reshape(-1)
+        keep = r[:, 2] * r[:, 3] >= self.min_area
+        return Detections.from_tlwh(k, r[keep], score[keep])
 
 
 def window_of(tlwh: FloatArray) -> FloatArray:

@@ -177,12 +177,18 @@ def score_sequence(
         raise ValueError(f"iou threshold must be in (0, 1], got {iou}")
     if ignore not in IGNORE_MODES:
         raise ValueError(f"ignore must be one of {', '.join(IGNORE_MODES)}, got {ignore!r}")
-    gt_t, pred_t = _as_table(gt, "gt"), _as_table(pred, "results")
+    # A reader's warnings (an empty file) wait for the checks: when the inputs are refused,
+    # the refusal is the one line to show, and it names the problem itself.
+    with warnings.catch_warnings(record=True) as read_warnings:
+        warnings.simplefilter("always")
+        gt_t, pred_t = _as_table(gt, "gt"), _as_table(pred, "results")
     notes: list[str] = []
     keep_gt = np.ones(len(gt_t), bool) if ignore == "none" else gt_t.conf != 0
     pairs = overlapping_pairs(gt_t.frame, gt_t.tlwh, pred_t.frame, pred_t.tlwh)
     if check:
         notes.extend(check_inputs(gt_t, pred_t, keep_gt, pairs, iou))
+    for w in read_warnings:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     keep_pred = np.ones(len(pred_t), bool)
     if ignore == "distractor":
         keep_pred = ~_distractor_hits(gt_t, pred_t, pairs, iou)

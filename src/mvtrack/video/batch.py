@@ -21,8 +21,8 @@ runs on :mod:`distributed`:
 A video that fails (missing, unreadable, a bad frame mid-way) is recorded with its one-line
 error and does not stop the others. ``out_root/batch.json`` (written atomically after every
 finished video) lists per video its status, frames, tracks, processing speed, seconds and error.
-Ctrl-C cancels the pending videos, closes the client and cluster and still writes
-``batch.json`` for what finished.
+Ctrl-C stops the videos being tracked (each writes the results of the frames it tracked),
+cancels the others, closes the client and cluster and still writes ``batch.json``.
 """
 
 from __future__ import annotations
@@ -126,6 +126,7 @@ def track_many(
     progress: bool | None = None,
     on_result: Callable[[BatchItem], None] | None = None,
     timeout: float = 10.0,
+    grace: float = 30.0,
 ) -> list[BatchItem]:
     """Track every video of ``videos`` in parallel, each into ``out_root/<video stem>/``.
 
@@ -154,12 +155,17 @@ def track_many(
     timeout : float
         Seconds to wait for the connection to ``scheduler`` and, if it has none, for a
         worker to join it.
+    grace : float
+        After Ctrl-C, seconds to wait for the videos being tracked to stop and write what
+        they tracked; those still running then are cancelled without results.
 
     Returns
     -------
     list of BatchItem
-        In the order of ``videos``. Ctrl-C (``KeyboardInterrupt`` in this process) cancels the
-        videos not finished, which come back with ``status="cancelled"``; it is not re-raised.
+        In the order of ``videos``. Ctrl-C (``KeyboardInterrupt`` in this process) stops the
+        videos being tracked, which write the results of the frames tracked so far, and
+        cancels the others; both come back with ``status="cancelled"`` (``frames`` says how
+        far each got); it is not re-raised.
 
     Raises
     ------
@@ -218,9 +224,13 @@ def track_many(
             root.mkdir(parents=True, exist_ok=True)
             begun = True
             save()
+            from distributed import Event
+
+            stop_name = f"mvtrack-batch-stop-{os.getpid()}-{time.time_ns()}"
+            stop = Event(stop_name, client=client)
             futures = client.map(
                 track_one, sources, outs, settings=settings, fps=fps, max_frames=max_frames,
-                pure=False,
+                stop=stop_name, pure=False,
             )
             index = {f.key: i for i, f in enumerate(futures)}
             try:
@@ -236,6 +246,13 @@ def track_many(
                         on_result(items[i])
             except KeyboardInterrupt:
                 interrupted = True
+                # the videos being tracked stop at their next frame and write what they
+                # tracked; those not started return at once
+                with contextlib.suppress(Exception):
+                    stop.set()
+                    from distributed import wait
+
+                    wait([f for f in futures if not f.done()], timeout=grace)
                 client.cancel([f for f in futures if not f.done()], force=True)
                 for f in futures:  # keep what finished while we were interrupted
                     i = index[f.key]

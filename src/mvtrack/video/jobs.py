@@ -12,7 +12,7 @@ import glob
 import os
 import re
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -130,6 +130,7 @@ def track_one(
     *,
     fps: float | None = None,
     max_frames: int | None = None,
+    stop: str | None = None,
 ) -> dict[str, Any]:
     """Track one video into ``out`` exactly as ``mvtrack track`` does; never raises.
 
@@ -150,6 +151,10 @@ def track_one(
         Frame rate to assume instead of the source's.
     max_frames : int, optional
         Stop after this many frames.
+    stop : str, optional
+        Name of a :class:`distributed.Event` (in a Dask task only): once it is set, the frame
+        loop ends as on Ctrl-C and the files of the frames tracked so far are written, so an
+        interrupted batch keeps the partial results of the videos it was tracking.
 
     Returns
     -------
@@ -166,9 +171,12 @@ def track_one(
     t0 = time.perf_counter()
     item = BatchItem(video=video, out=out, status="failed")
     try:
-        run = track_video(
-            video, out, settings, fps=fps, max_frames=max_frames, progress=False
-        )
+        if stop is None:
+            run = track_video(
+                video, out, settings, fps=fps, max_frames=max_frames, progress=False
+            )
+        else:
+            run = _track_until_stopped(video, out, settings, fps, max_frames, _StopFlag(stop))
     except KeyboardInterrupt:
         item.status, item.error = "cancelled", "interrupted before any frame was tracked"
     except Exception as exc:  # one video's failure must not end the batch
@@ -186,6 +194,52 @@ def track_one(
             item.status = "ok"
     item.seconds = round(time.perf_counter() - t0, 3)
     return item.as_dict()
+
+
+class _StopFlag:
+    """A :class:`distributed.Event` looked at no more often than every ``every`` seconds."""
+
+    def __init__(self, name: str, every: float = 0.25) -> None:
+        from distributed import Event
+
+        self.event = Event(name)
+        self.every = every
+
+    def is_set(self) -> bool:
+        return bool(self.event.is_set())
+
+    def frames(self, frames: Iterable[Any]) -> Iterator[Any]:
+        """``frames`` until the event is set; then ``KeyboardInterrupt``, which the frame loop
+        takes as Ctrl-C (it writes what was tracked)."""
+        last = time.monotonic()
+        for frame in frames:
+            now = time.monotonic()
+            if now - last >= self.every:
+                last = now
+                if self.is_set():
+                    raise KeyboardInterrupt
+            yield frame
+
+
+def _track_until_stopped(video: str, out: str, settings: RunSettings, fps: float | None,
+                         max_frames: int | None, flag: _StopFlag) -> Any:
+    """:func:`mvtrack.video.track_video` with its frames taken through ``flag``."""
+    from mvtrack.io.video import open_source
+    from mvtrack.video.build import build_detector, build_tracker
+    from mvtrack.video.run import track_to_folder
+    from mvtrack.video.settings import resolve_settings
+
+    if flag.is_set():  # the batch was interrupted before this video started
+        raise KeyboardInterrupt
+    src = open_source(video, fps=fps)
+    with src:
+        resolved = resolve_settings(settings, src.size)
+        parts = (build_detector(resolved), build_tracker(resolved, src.fps))
+        return track_to_folder(
+            flag.frames(frame for _, frame in src), fps=src.fps, size=src.size,
+            settings=resolved, out=out, max_frames=max_frames, total=src.frame_count,
+            source=str(video), progress=False, parts=parts, source_error=lambda: src.error,
+        )
 
 
 def finished_on_disk(item: BatchItem, since: float) -> BatchItem | None:
