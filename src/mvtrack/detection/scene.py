@@ -429,8 +429,8 @@ class SceneDetector:
       first frame are then not learnt into it); the frames are then given back unchanged, so
       the loop still sees every frame from the first. ``"none"``: the first frame is the
       background (it gives no detections);
-    - ``detector(frame) -> Detections`` with the predicted boxes of the tracker's confirmed
-      tracks from the last :meth:`observe`;
+    - ``detector(frame, index=None) -> Detections`` with the predicted boxes of the tracker's
+      confirmed tracks from the last :meth:`observe`;
     - ``observe(dets, tracks)`` after each ``tracker.step``: the size prior learns from the
       isolated, moving, confirmed tracks of plain blobs (:class:`TrackFeedback`);
     - :attr:`flags` (plain / merged / split of each box of the last frame) and :attr:`mask`
@@ -528,9 +528,10 @@ class SceneDetector:
             if close is not None:
                 close()
 
-    def __call__(self, frame: Image) -> Detections:
+    def __call__(self, frame: Image, index: int | None = None) -> Detections:
+        """Detections of ``frame`` (``index``: its frame number, default the count so far)."""
         self._shape = frame.shape[:2]
-        return self.frontend(frame, predicted=self.feedback.predicted)
+        return self.frontend(frame, index, predicted=self.feedback.predicted)
 
     def observe(self, dets: Detections, tracks: TrackFrame) -> None:
         """Teach the prior and keep the predicted boxes for the next frame."""
