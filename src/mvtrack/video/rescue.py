@@ -78,15 +78,16 @@ class StoppedVehicleRescuer:
             # not around the prediction, which keeps drifting with the last velocity estimate
             order = np.argsort(tab.uid)
             at = order[np.searchsorted(tab.uid[order], uids)]
-            centre = self._centres(uids, tab.last_xy[at])
-            f_sub, xy_sub = search(uids, centre, wh)
-            found = np.array(f_sub, bool)
-            xy = np.array(xy_sub, np.float64)
+            last = tab.last_xy[at]
+            centre = self._centres(uids, last)
+            found, xy = self._search(search, uids, centre, wh)
+            # not at its template's place: where it was last measured
+            again = ~found & (centre != last).any(axis=1)
+            if again.any():
+                f2, xy2 = self._search(search, uids[again], last[again], wh[again])
+                found[again], xy[again] = f2, xy2
             if not found.any():
                 return found, xy
-            # the match must sit where the vehicle was last seen (it stands still)
-            d = xy - centre
-            found &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
             # and no detection may cover it (a detected object has not faded)
             if len(dets) and found.any():
                 lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
@@ -96,6 +97,18 @@ class StoppedVehicleRescuer:
             return found, xy
 
         return rescue
+
+    def _search(
+        self, search: RescueFn, uids: IntArray, centre: NDArray[np.float64], wh: Any
+    ) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+        """NCC search around ``centre``; matches farther than ``max_shift`` from it refused."""
+        f_sub, xy_sub = search(uids, centre, wh)
+        found = np.array(f_sub, bool)
+        xy = np.array(xy_sub, np.float64)
+        if found.any():  # the match must sit where the vehicle was last seen (it stands)
+            d = xy - centre
+            found &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
+        return found, xy
 
     def _centres(self, uids: IntArray, last: NDArray[np.float64]) -> NDArray[np.float64]:
         """Where each missed track's vehicle was last seen: the centre of its template's box
@@ -112,7 +125,10 @@ class StoppedVehicleRescuer:
         if bank is None or not hasattr(bank, "boxes"):
             return last
         box = bank.boxes(uids)
-        inside = (np.abs(last - box[:, :2]) <= box[:, 2:] / 2).all(axis=1)  # NaN: False
+        # within one box length of the box (a fragment at its edge, or a detection of a
+        # vehicle passing close by that the stopped track took for one frame)
+        reach = box[:, 2:] / 2 + box[:, 2:].max(axis=1, keepdims=True)
+        inside = (np.abs(last - box[:, :2]) <= reach).all(axis=1)  # NaN: False
         return np.where(inside[:, None], box[:, :2], last)
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
