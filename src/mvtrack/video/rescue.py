@@ -59,6 +59,8 @@ class StoppedVehicleRescuer:
 
     #: default ``max_shift`` in px
     MAX_SHIFT = 4.0
+    #: a covering detection larger than this many times the track's box is a merged blob
+    MERGED = 2.5
 
     def __init__(self, inner: Any, tracker: Any, max_shift: float = MAX_SHIFT) -> None:
         if not max_shift > 0:
@@ -88,11 +90,15 @@ class StoppedVehicleRescuer:
                 found[again], xy[again] = f2, xy2
             if not found.any():
                 return found, xy
-            # and no detection may cover it (a detected object has not faded)
+            # and no detection of about its size may cover it (a detected object has not
+            # faded); a blob several times its size is vehicles merged into one (a queue that
+            # starts again, its vehicles still close): the vehicle is found inside it
             if len(dets) and found.any():
                 lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
                 inside = ((xy[:, None, :] >= lo[None]) & (xy[:, None, :] <= hi[None])).all(2)
-                found &= ~inside.any(axis=1)
+                area = np.asarray(wh, np.float64).reshape(-1, 2).prod(axis=1)
+                merged = dets.wh.prod(axis=1)[None, :] > self.MERGED * area[:, None]
+                found &= ~(inside & ~merged).any(axis=1)
             xy[~found] = np.nan
             return found, xy
 
