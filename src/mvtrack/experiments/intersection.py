@@ -397,7 +397,8 @@ tracked by paper 1's system (20 px circular gate, non-exclusive nearest, warm-up
 filter with R = 4 px², q = 0.05, or RLS) on the SPEC §1.1 [R] disturbance map (T = 25,
 β_min = 0.02, 3×3 opening, area ≥ 20 px, no closing), with template matching for stopped
 vehicles (NCC ≥ 0.8 inside the gate on 1 px-smoothed grey images, `StoppedVehicleRescuer`).
-Results rows leave out coasting predictions. Intervals are 95 % Wilson intervals over all vehicles of all runs.
+Results rows leave out coasting predictions. Intervals are 95 % Wilson intervals over all
+vehicles of all runs.
 
 **KF against RLS.** With the specification's blob stage both predictors follow nearly every
 moving vehicle ({fmt_rate(kf['followed_moving'])} and {fmt_rate(rl['followed_moving'])}):
