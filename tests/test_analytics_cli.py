@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cv2
 import numpy as np
 import pytest
 
+from _media import box_video
 from mvtrack.analytics.outputs import read_table
 from mvtrack.cli import main
 from mvtrack.config import load_config
@@ -31,20 +31,6 @@ points = [[48, 0], [48, 64]]
 hysteresis = 3
 labels = ["westbound", "eastbound"]
 """
-
-
-def _box_video(path: Path, n: int = 40, speed: int = 2) -> Path:
-    """A small MJPG video (15 fps) with one bright box moving right at ``speed`` px/frame."""
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15, (96, 64))
-    assert writer.isOpened()
-    for k in range(n):
-        img = np.full((64, 96, 3), 80, np.uint8)
-        if k >= 5:
-            x = 6 + speed * (k - 5)
-            img[28:36, x : x + 10] = 230
-        writer.write(img)
-    writer.release()
-    return path
 
 
 def test_config_keeps_the_analytics_table(tmp_path: Path) -> None:
@@ -70,7 +56,7 @@ def test_config_refuses_a_bad_analytics_key(tmp_path: Path, text: str, key: str)
 
 
 def test_track_with_analytics_table_writes_counts(tmp_path: Path) -> None:
-    video = _box_video(tmp_path / "box.avi")
+    video = box_video(tmp_path / "box.avi", n=40)
     cfg = tmp_path / "scene.toml"
     cfg.write_text(SCENE)
     out = tmp_path / "out"
@@ -93,7 +79,7 @@ def test_track_with_analytics_table_writes_counts(tmp_path: Path) -> None:
 def test_track_writes_every_rows_state_and_evidence(tmp_path: Path) -> None:
     from mvtrack.io.mot import read_tracks
 
-    video = _box_video(tmp_path / "box.avi", n=30)
+    video = box_video(tmp_path / "box.avi", n=30)
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out), "--no-video"]) == 0
     st = read_table(out / "states.csv")
@@ -110,7 +96,7 @@ def test_track_writes_every_rows_state_and_evidence(tmp_path: Path) -> None:
 
 
 def test_track_stops_before_tracking_on_a_bad_analytics_key(tmp_path: Path, capsys) -> None:
-    video = _box_video(tmp_path / "box.avi")
+    video = box_video(tmp_path / "box.avi", n=40)
     cfg = tmp_path / "scene.toml"
     cfg.write_text("[analytics.calibration]\nmetres_per_pixel = -1\n")
     out = tmp_path / "out"

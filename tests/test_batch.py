@@ -8,10 +8,9 @@ import json
 import os
 from pathlib import Path
 
-import cv2
-import numpy as np
 import pytest
 
+from _media import box_video
 from mvtrack.cli import main
 from mvtrack.cli.batch import expand_videos
 from mvtrack.config import RunSettings
@@ -26,20 +25,6 @@ _QUIET_CLUSTER = {"processes": True, "host": "127.0.0.1", "dashboard_address": N
                   "silence_logs": 40, "scheduler_kwargs": {"dashboard_address": "127.0.0.1:0"}}
 
 
-def _write_boxes(path: Path, n: int = 30, speed: int = 2) -> Path:
-    """A small MJPG video with one bright box moving right at ``speed`` px per frame."""
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15, (96, 64))
-    assert writer.isOpened()
-    for k in range(n):
-        img = np.full((64, 96, 3), 80, np.uint8)
-        if k >= 5:
-            x = 6 + speed * (k - 5)
-            img[28:36, x : x + 10] = 230
-        writer.write(img)
-    writer.release()
-    return path
-
-
 @pytest.fixture(scope="module")
 def videos(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """Two rendered scenes (nine vehicles, a crossing) that share the stem ``cam`` in
@@ -52,7 +37,7 @@ def videos(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
         "cam_a": write_video(scene.truncate(40), root / "a" / "cam.mp4", progress=False),
         "cam_b": write_video(x7_crossing(0).truncate(40), root / "b" / "cam.mp4",
                              progress=False),
-        "boxes": _write_boxes(root / "boxes.avi"),
+        "boxes": box_video(root / "boxes.avi"),
     }
 
 
@@ -211,7 +196,7 @@ def test_ctrl_c_in_a_terminal_stops_workers_and_exits_130(videos, tmp_path) -> N
 def test_track_one_never_raises(tmp_path) -> None:
     out = track_one(str(tmp_path / "gone.avi"), str(tmp_path / "o"), NO_VIDEO)
     assert out["status"] == "failed" and "gone.avi" in out["error"]
-    ok = track_one(str(_write_boxes(tmp_path / "v.avi")), str(tmp_path / "o2"), NO_VIDEO,
+    ok = track_one(str(box_video(tmp_path / "v.avi")), str(tmp_path / "o2"), NO_VIDEO,
                      max_frames=12)
     assert ok["status"] == "ok" and ok["frames"] == 12 and ok["error"] is None
 
@@ -284,7 +269,7 @@ def test_cli_bad_usage_exits_2_before_any_work(tmp_path, capsys, args, needle) -
 
 
 def test_unreachable_scheduler_is_one_line_oserror_and_writes_nothing(tmp_path) -> None:
-    video = _write_boxes(tmp_path / "v.avi", n=8)
+    video = box_video(tmp_path / "v.avi", n=8)
     with pytest.raises(OSError, match=r"cannot connect to Dask scheduler tcp://127\.0\.0\.1:9"):
         track_many([video], tmp_path / "out", NO_VIDEO, scheduler="tcp://127.0.0.1:9",
                    timeout=1.0)
@@ -296,7 +281,7 @@ def test_scheduler_without_workers_is_an_error_not_a_hang(tmp_path) -> None:
 
     from mvtrack.video.batch import _environ_kept
 
-    video = _write_boxes(tmp_path / "v.avi", n=8)
+    video = box_video(tmp_path / "v.avi", n=8)
     with _environ_kept(), LocalCluster(n_workers=0, **_QUIET_CLUSTER) as empty:
         with pytest.raises(OSError, match="has no workers"):
             track_many([video], tmp_path / "out", NO_VIDEO, scheduler=empty.scheduler_address,

@@ -35,8 +35,9 @@ def _centre(tl: tuple[int, int]) -> np.ndarray:
 
 
 def _bank() -> TemplateBank:
-    """A bank without the travel guard, for tests of the search itself."""
-    return TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, max_drift=None)
+    """A bank without the travel guard and without smoothing (the bare NCC of SPEC §1.1 [R]),
+    for tests of the search itself."""
+    return TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, max_drift=None, smooth=0)
 
 
 def _bank_with_vehicle(tl=(50, 40), uid: int = 7) -> TemplateBank:
@@ -421,7 +422,7 @@ def test_search_prefilter_skips_leaving_drifting_and_unknown_tracks() -> None:
     """The missed tracks that are unknown, predicted with their box outside the image, or
     (with ``max_drift``) predicted far from their last place get no search (NaN score)."""
     tl = (50, 40)
-    bank = TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, max_drift=None)
+    bank = TemplateBank(min_travel=0, min_travel_px=0, min_hits=0, max_drift=None, smooth=0)
     other = [130.0, 100.0]
     bank.observe(_frame(tl, seed=1), [7, 8], [_centre(tl), other], [[VW, VH], [VW, VH]])
     frame = _frame(tl, seed=2)

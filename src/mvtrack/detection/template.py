@@ -118,6 +118,7 @@ class TemplateBank:
         min_hits: int = 5,
         min_fill: float = 0.5,
         max_drift: float | None = 5.0,
+        smooth: float = 1.0,
     ) -> None:
         if not (-1.0 <= min_score <= 1.0):
             raise ValueError(f"min_score must be an NCC in [-1, 1], got {min_score}")
@@ -137,6 +138,8 @@ class TemplateBank:
             raise ValueError(f"min_fill must be in [0, 1], got {min_fill}")
         if max_drift is not None and not max_drift >= 0:
             raise ValueError(f"max_drift must be ≥ 0 px or None, got {max_drift}")
+        if not (math.isfinite(smooth) and smooth >= 0):
+            raise ValueError(f"smooth must be ≥ 0 px, got {smooth}")
         self.min_score = float(min_score)
         self.gate_radius = float(gate_radius)
         self.min_size = int(min_size)
@@ -147,6 +150,8 @@ class TemplateBank:
         self.min_hits = int(min_hits)
         self.min_fill = float(min_fill)
         self.max_drift = None if max_drift is None else float(max_drift)
+        self.smooth = float(smooth)
+        self._pad = math.ceil(3 * self.smooth) if self.smooth > 0 else 0
         self.clear()
 
     # ------------------------------------------------------------------ bookkeeping (arrays)
@@ -303,6 +308,20 @@ class TemplateBank:
         """Per track in :attr:`uids`: far enough from its first detection, often enough seen."""
         return self._eligible_rows(self._f[:-1])
 
+    def boxes(self, uids: ArrayLike) -> FloatArray:
+        """(K, 4) ``(x, y, w, h)``: the box each track's template is (or will be) cut from,
+        its last full-size detected box; NaN for tracks the bank does not hold.
+
+        For a stopped vehicle this is where it stands: the blob of a vehicle fading into the
+        background breaks into fragments at its edges, whose centroids (the track's last
+        measurements) lie anywhere inside that box.
+        """
+        uids = np.asarray(uids, np.int64).reshape(-1)
+        pos, has = self._rows(uids)
+        out = self._f[pos, self._BOX].copy()
+        out[~has] = np.nan
+        return out
+
     def retain(self, uids: ArrayLike) -> None:
         """Keep only the tracks in ``uids`` (the live ones); forget deleted tracks."""
         keep = _member(self.uids, np.asarray(uids, np.int64).reshape(-1))
@@ -337,7 +356,7 @@ class TemplateBank:
         y1 = min(top + max(round(h), 1), height)
         if x1 - x0 < self.min_size or y1 - y0 < self.min_size:
             return None
-        patch = np.ascontiguousarray(grey(frame[y0:y1, x0:x1]))
+        patch = self._grey(frame, x0, y0, x1, y1)
         mask = None
         if self._mask is not None:
             mask = cv2.compare(self._mask[y0:y1, x0:x1], 0, cv2.CMP_GT)  # 255 on the object
@@ -348,6 +367,17 @@ class TemplateBank:
             return None
         tick = int(self._f[i, self._TICK])
         return Template(patch, mask, (x - x0, y - y0), tick, float(mean))
+
+    def _grey(self, frame: Image, x0: int, y0: int, x1: int, y1: int) -> Image:
+        """Grey levels of ``frame[y0:y1, x0:x1]``, smoothed by a Gaussian of ``smooth`` px
+        (computed on the region widened by 3σ, so the borders see their real neighbours)."""
+        if self._pad == 0:
+            return np.ascontiguousarray(grey(frame[y0:y1, x0:x1]))
+        height, width = frame.shape[:2]
+        a, b = max(x0 - self._pad, 0), max(y0 - self._pad, 0)
+        c, d = min(x1 + self._pad, width), min(y1 + self._pad, height)
+        g = cv2.GaussianBlur(grey(frame[b:d, a:c]), (0, 0), self.smooth)
+        return np.ascontiguousarray(g[y0 - b : y1 - b, x0 - a : x1 - a])
 
     def template(self, uid: int) -> Image | None:
         """The grey patch held for ``uid`` (cut now if it is due), or ``None``."""
@@ -450,8 +480,11 @@ class TemplateBank:
             px, py = p_list[j]
             bx, by, bw, bh = f[0:4]
             if max_drift2 is not None:  # ... and have come to rest where last seen
+                # (its last detection or match, or the box of its template: a vehicle fading
+                # into the background leaves fragments of its blob that wander inside its box)
                 dx, dy = px - f[4], py - f[5]
-                if not dx * dx + dy * dy <= max_drift2:  # False for a NaN prediction
+                ex, ey = px - bx, py - by
+                if not min(dx * dx + dy * dy, ex * ex + ey * ey) <= max_drift2:  # NaN: False
                     continue
             elif not (math.isfinite(px) and math.isfinite(py)):
                 continue
@@ -478,7 +511,7 @@ class TemplateBank:
                 continue  # predicted partly outside the image: leaving, not stopped
             x0, y0 = max(tx - ri, 0), max(ty - ri, 0)
             x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
-            window = grey(frame[y0:y1, x0:x1])
+            window = self._grey(frame, x0, y0, x1, y1)
             if t.mask is None:
                 ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
             else:  # NCC over the object's pixels only

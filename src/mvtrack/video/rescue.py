@@ -59,6 +59,8 @@ class StoppedVehicleRescuer:
 
     #: default ``max_shift`` in px
     MAX_SHIFT = 4.0
+    #: a covering detection larger than this many times the track's box is a merged blob
+    MERGED = 2.5
 
     def __init__(self, inner: Any, tracker: Any, max_shift: float = MAX_SHIFT) -> None:
         if not max_shift > 0:
@@ -79,23 +81,61 @@ class StoppedVehicleRescuer:
             order = np.argsort(tab.uid)
             at = order[np.searchsorted(tab.uid[order], uids)]
             last = tab.last_xy[at]
-            f_sub, xy_sub = search(uids, last, wh)
-            found = np.array(f_sub, bool)
-            xy = np.array(xy_sub, np.float64)
+            centre = self._centres(uids, last)
+            found, xy = self._search(search, uids, centre, wh)
+            # not at its template's place: where it was last measured
+            again = ~found & (centre != last).any(axis=1)
+            if again.any():
+                f2, xy2 = self._search(search, uids[again], last[again], wh[again])
+                found[again], xy[again] = f2, xy2
             if not found.any():
                 return found, xy
-            # the match must sit where the vehicle was last measured (it stands still)
-            d = xy - last
-            found &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
-            # and no detection may cover it (a detected object has not faded)
+            # and no detection of about its size may cover it (a detected object has not
+            # faded); a blob several times its size is vehicles merged into one (a queue that
+            # starts again, its vehicles still close): the vehicle is found inside it
             if len(dets) and found.any():
                 lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
                 inside = ((xy[:, None, :] >= lo[None]) & (xy[:, None, :] <= hi[None])).all(2)
-                found &= ~inside.any(axis=1)
+                area = np.asarray(wh, np.float64).reshape(-1, 2).prod(axis=1)
+                merged = dets.wh.prod(axis=1)[None, :] > self.MERGED * area[:, None]
+                found &= ~(inside & ~merged).any(axis=1)
             xy[~found] = np.nan
             return found, xy
 
         return rescue
+
+    def _search(
+        self, search: RescueFn, uids: IntArray, centre: NDArray[np.float64], wh: Any
+    ) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+        """NCC search around ``centre``; matches farther than ``max_shift`` from it refused."""
+        f_sub, xy_sub = search(uids, centre, wh)
+        found = np.array(f_sub, bool)
+        xy = np.array(xy_sub, np.float64)
+        if found.any():  # the match must sit where the vehicle was last seen (it stands)
+            d = xy - centre
+            found &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
+        return found, xy
+
+    def _centres(self, uids: IntArray, last: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Where each missed track's vehicle was last seen: the centre of its template's box
+        when its last measurement lies inside that box, else the last measurement.
+
+        A vehicle that stops fades into the background over tens of frames; meanwhile its
+        blob shrinks to fragments at its edges (the pixels that still differ most from the
+        background), and the track follows their centroids, up to half a box length off the
+        vehicle's centre (6 px of a 16 px vehicle in ``intersection``). The template keeps
+        the vehicle's last full-size box, so the match lies at that box's centre, farther than
+        ``max_shift`` from the last fragment: searched around the fragment it was refused.
+        """
+        bank = getattr(self.inner, "bank", None)
+        if bank is None or not hasattr(bank, "boxes"):
+            return last
+        box = bank.boxes(uids)
+        # within one box length of the box (a fragment at its edge, or a detection of a
+        # vehicle passing close by that the stopped track took for one frame)
+        reach = box[:, 2:] / 2 + box[:, 2:].max(axis=1, keepdims=True)
+        inside = (np.abs(last - box[:, :2]) <= reach).all(axis=1)  # NaN: False
+        return np.where(inside[:, None], box[:, :2], last)
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
         """Feed the template bank."""

@@ -1,0 +1,28 @@
+"""Stopped vehicles keep their identity (issue 14): paper 1's intersection (X5), whose two
+waiting vehicles brake to the stop line, stand still from frame 60 to 300 (8 s at 30 fps) and
+drive on. While a vehicle stands it fades into the disturbance-map background, its blob breaks
+into fragments at its edges and vanishes; template matching (SPEC §1.1 step 3) must hold its
+track, with the same ID, through the whole wait."""
+
+from __future__ import annotations
+
+import pytest
+
+
+@pytest.mark.parametrize("tracker", ["kalman-ca", "default"])
+def test_waiting_vehicles_keep_one_id_through_the_wait(tracker: str) -> None:
+    from mvtrack.experiments import intersection as x5
+    from mvtrack.experiments._video import track_scene
+    from mvtrack.sim.render import render_frames
+    from mvtrack.sim.scenes import x5_intersection
+
+    scene = x5_intersection(0)
+    opts = x5._settings(scene)[tracker]
+    run = track_scene(scene, opts["config"], seed=0, frames=list(render_frames(scene, 0)),
+                      detector_params=opts["detector_params"])
+    for v in scene.ids_of("waiting").tolist():
+        tid, share = run.match.followed_share(v, x5.WAIT)
+        assert share >= 0.99, f"vehicle {v}: one track follows {share:.0%} of its wait"
+        # the same track came with it to the stop line and leaves with it
+        whole_tid, whole = run.match.followed_share(v)
+        assert whole_tid == tid and whole >= 0.8, (v, whole_tid, tid, whole)
