@@ -260,7 +260,7 @@ def test_deleting_only_the_last_rows_by_slicing_equals_gathering_the_kept_rows(
     frames = _cluttered_frames(8, 60, 3)
     config = TrackerConfig(predictor=predictor)
     fast, fast_end = _run(frames, config)
-    kept_rows = tr._kept_rows
+    kept_rows = tr.kept_rows
     sliced = []
 
     def as_indices(delete):  # the general path: the kept rows as indices, always
@@ -269,7 +269,7 @@ def test_deleting_only_the_last_rows_by_slicing_equals_gathering_the_kept_rows(
             sliced.append(keep)
         return (~delete).nonzero()[0]
 
-    monkeypatch.setattr(tr, "_kept_rows", as_indices)
+    monkeypatch.setattr(tr, "kept_rows", as_indices)
     general, general_end = _run(frames, config)
     assert sliced, "the scene should delete only trailing rows in some frames"
     _assert_same_frames(fast, general)
@@ -279,14 +279,14 @@ def test_deleting_only_the_last_rows_by_slicing_equals_gathering_the_kept_rows(
 
 
 def test_kept_rows_are_a_slice_only_when_the_last_rows_end() -> None:
-    from mvtrack.tracking import tracker as tr
+    from mvtrack.tracking import table as tr
 
     rng = np.random.default_rng(4)
     masks = [rng.random(rng.integers(1, 9)) > rng.uniform(0.2, 0.9) for _ in range(300)]
     masks += [np.array([False, False, True, True]), np.array([True] * 3)]
     slices = 0
     for delete in masks:
-        keep = tr._kept_rows(delete)
+        keep = tr.kept_rows(delete)
         rows = np.arange(delete.size)
         np.testing.assert_array_equal(rows[keep], (~delete).nonzero()[0])
         slices += isinstance(keep, slice)
@@ -294,7 +294,7 @@ def test_kept_rows_are_a_slice_only_when_the_last_rows_end() -> None:
 
 
 def test_table_and_state_slices_equal_the_gathered_rows() -> None:
-    from mvtrack.tracking import tracker as tr
+    from mvtrack.tracking import table as tr
     from mvtrack.types import n_rows
 
     rng = np.random.default_rng(0)
@@ -306,7 +306,7 @@ def test_table_and_state_slices_equal_the_gathered_rows() -> None:
     fast = FastCVPredictor().init(rng.normal(size=(7, 2)))
     general = make_predictor("kalman-ca").init(rng.normal(size=(7, 2)))
     for state in (fast, general):
-        a, b = tr._take_state(state, slice(0, 4)), tr._take_state(state, np.arange(4))
+        a, b = tr.take_state(state, slice(0, 4)), tr.take_state(state, np.arange(4))
         assert type(a) is type(state)
         for name in ("x", "P"):
             if hasattr(state, name):
@@ -328,15 +328,15 @@ def test_counters_with_a_mask_equal_counters_with_row_indices() -> None:
 
 
 def test_detection_rows_pad_with_nan_for_tracks_without_a_detection() -> None:
-    from mvtrack.tracking import tracker as tr
+    from mvtrack.tracking import table as tr
     from mvtrack.types import Detections
 
     dets = Detections(0, [[1.0, 2.0], [3.0, 4.0]], [[5.0, 6.0], [7.0, 8.0]])
-    rows = tr._detection_rows(dets).take(np.array([1, -1, 0]), 0)
+    rows = tr.detection_rows(dets).take(np.array([1, -1, 0]), 0)
     np.testing.assert_array_equal(rows[0], [3.0, 4.0, 7.0, 8.0])
     assert np.isnan(rows[1]).all()
     np.testing.assert_array_equal(rows[2], [1.0, 2.0, 5.0, 6.0])
-    assert tr._detection_rows(Detections.empty(0)).shape == (1, 4)
+    assert tr.detection_rows(Detections.empty(0)).shape == (1, 4)
 
 
 def test_many_births_in_one_frame_get_consecutive_uids() -> None:
