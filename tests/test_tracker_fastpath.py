@@ -2,7 +2,7 @@
 
 - :class:`FastCVPredictor` (closed-form per-axis CV Kalman) against ``kalman-cv`` of
   :mod:`mvtrack.filters.predictors` (batched matrix Kalman filter, Joseph form).
-- :mod:`mvtrack.tracking.associate` against :mod:`mvtrack.association` (gating values and the
+- :mod:`mvtrack.association.discs` against :mod:`mvtrack.association` (gating values and the
   penalised optimal assignment), and against brute force on tiny problems.
 """
 
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from mvtrack.association import TrackView, assign, candidate_pairs
+from mvtrack.association import discs as fa
 from mvtrack.filters.predictors import make_predictor
-from mvtrack.tracking import associate as fa
 from mvtrack.tracking.fastkf import FastCVPredictor
 
 

@@ -107,7 +107,7 @@ def _finish(t: IntArray, d: IntArray, c: FloatArray, n_tracks: int, n_dets: int)
     )
 
 
-def _first_per_group(group: IntArray) -> NDArray[np.bool_]:
+def first_per_group(group: IntArray) -> NDArray[np.bool_]:
     """For a sorted ``group`` array, True at the first element of each run."""
     first = np.ones(group.shape[0], dtype=bool)
     first[1:] = group[1:] != group[:-1]
@@ -223,7 +223,7 @@ def _solve_dense(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDAr
     return chosen
 
 
-def _solve_sparse(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDArray[np.bool_]:
+def solve_sparse(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDArray[np.bool_]:
     """Optimal exclusive matching of any number of clusters in one sparse LAPJVsp solve.
 
     Rows: tracks, then one dummy per detection; columns: detections, then one dummy per track.
@@ -380,7 +380,7 @@ def _optimal(
         tri = np.flatnonzero(trivial[lab])
         if tri.size:
             order = tri[np.lexsort((d[tri], t[tri], c[tri], lab[tri]))]
-            chosen[rest[order[_first_per_group(lab[order])]]] = True
+            chosen[rest[order[first_per_group(lab[order])]]] = True
         # conflicting clusters (at least two tracks and two detections)
         hard = np.flatnonzero(~trivial[lab])
         if hard.size:
@@ -403,11 +403,11 @@ def _optimal(
             elif solver == "sparse" or (
                 solver == "auto" and (n_hard > SPARSE_CLUSTERS or largest > SMALL_NODES)
             ):
-                sel = _solve_sparse(t[hard], d[hard], c[hard], u / 2)
+                sel = solve_sparse(t[hard], d[hard], c[hard], u / 2)
                 chosen[rest[hard[sel]]] = True
             else:
                 order = hard[np.argsort(lab[hard], kind="stable")]
-                bounds = np.flatnonzero(_first_per_group(lab[order]))
+                bounds = np.flatnonzero(first_per_group(lab[order]))
                 for s, e in zip(bounds, [*bounds[1:], order.size], strict=True):
                     idx = order[s:e]
                     chosen[rest[idx[_solve_dense(t[idx], d[idx], c[idx], u / 2)]]] = True

@@ -32,11 +32,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack.association import discs
 from mvtrack.association.assign import assign as assign_pairs
 from mvtrack.association.distances import TrackView, get_distance
 from mvtrack.association.gating import candidate_pairs
 from mvtrack.association.regions import SHAPE_PARAMS, GateRegions, axis_shapes, gate_shapes
-from mvtrack.tracking import associate as fast_assoc
 from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.fastkf import FastCVPredictor
 from mvtrack.tracking.lifecycle import TENTATIVE
@@ -211,13 +211,13 @@ class Associator:
             scale = pred.position_var(ps)[cand] + r  # S = (P̄ + r) I
         size = self._size_term(tab.floats[cand, WH], left[:, 2:])
         txy = gxy.take(cand, 0)
-        if cand.size * lo.size <= fast_assoc.DENSE_LSA:
-            mt, md = fast_assoc.dense_optimal(txy, left[:, :2], scale, self._gate, size)
+        if cand.size * lo.size <= discs.DENSE_LSA:
+            mt, md = discs.dense_optimal(txy, left[:, :2], scale, self._gate, size)
         else:
-            ti, dj, cost = fast_assoc.gate_pairs(txy, left[:, :2], scale, self._gate, size)
+            ti, dj, cost = discs.gate_pairs(txy, left[:, :2], scale, self._gate, size)
             if ti.size == 0:
                 return _EMPTY, _EMPTY
-            mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, lo.size, self._gate)
+            mt, md = discs.optimal(ti, dj, cost, cand.size, lo.size, self._gate)
         return cand[mt], lo[md]
 
     def _associate(
@@ -239,7 +239,7 @@ class Associator:
         self, ps: Any, gxy: FloatArray, dets: Detections, f2: FloatArray | None,
         r_rows: FloatArray | None, twh: FloatArray,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], bool]:
-        """Gate and assign through :mod:`mvtrack.tracking.associate` (disc-shaped gates);
+        """Gate and assign through :mod:`mvtrack.association.discs` (disc-shaped gates);
         the flag says whether the second stage was done too. ``f2`` (N, 2) stretches the
         Euclidean gates per axis (``Δx²/f_x² + Δy²/f_y² <= gate``), ``r_rows`` (N,) are the
         tracks' measurement variances, ``twh`` (N, 2) their box sizes (for the size term of
@@ -252,19 +252,19 @@ class Associator:
             scale = self.predictor.position_var(ps) + r  # S = (P̄ + r) I
         rule = self.config.assign
         staged = False
-        if rule == "optimal" and not self._assign_params and n * m <= fast_assoc.DENSE_LSA:
+        if rule == "optimal" and not self._assign_params and n * m <= discs.DENSE_LSA:
             if self._gate2 is not None:  # both stages from one distance matrix
-                mt, md, ud = fast_assoc.dense_two_stage(
+                mt, md, ud = discs.dense_two_stage(
                     gxy, dets.xy, scale, self._gate, self._gate2, f2, size
                 )
                 return mt, md, ud, True
             else:
-                mt, md = fast_assoc.dense_optimal(gxy, dets.xy, scale, self._gate, size)
+                mt, md = discs.dense_optimal(gxy, dets.xy, scale, self._gate, size)
         elif rule == "optimal" and not self._assign_params:
-            ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate, size)
-            mt, md = fast_assoc.optimal(ti, dj, cost, n, m, self._gate)
+            ti, dj, cost = discs.gate_pairs(gxy, dets.xy, scale, self._gate, size)
+            mt, md = discs.optimal(ti, dj, cost, n, m, self._gate)
         else:
-            ti, dj, cost = fast_assoc.gate_pairs(gxy, dets.xy, scale, self._gate, size)
+            ti, dj, cost = discs.gate_pairs(gxy, dets.xy, scale, self._gate, size)
             a = assign_pairs(ti, dj, cost, n, m, rule, **self._assign_params)
             mt, md = a.track, a.det
         used = np.zeros(m, dtype=bool)
@@ -286,13 +286,13 @@ class Associator:
         left = drow.take(ud, 0)
         size = self._size_term(twh.take(cand, 0), left[:, 2:])
         txy, dxy = gxy.take(cand, 0), left[:, :2]
-        if cand.size * ud.size <= fast_assoc.DENSE_LSA:  # the same result, one dense solve
-            mt, md = fast_assoc.dense_optimal(txy, dxy, scale, g, size)
+        if cand.size * ud.size <= discs.DENSE_LSA:  # the same result, one dense solve
+            mt, md = discs.dense_optimal(txy, dxy, scale, g, size)
             return cand[mt], ud[md]
-        ti, dj, cost = fast_assoc.gate_pairs(txy, dxy, scale, g, size)
+        ti, dj, cost = discs.gate_pairs(txy, dxy, scale, g, size)
         if ti.size == 0:
             return _EMPTY, _EMPTY
-        mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, g)
+        mt, md = discs.optimal(ti, dj, cost, cand.size, ud.size, g)
         return cand[mt], ud[md]
 
     def _recover(
@@ -331,14 +331,14 @@ class Associator:
         size = None  # the size gate only (no size term in this cost)
         if self._size_gate is not None:
             size = (tf[:, WH], left[:, 2:], 0.0, self._size_gate)
-        if cand.size * ud.size <= fast_assoc.DENSE_LSA:
-            mt, md = fast_assoc.dense_optimal(last_xy, dxy, r2, 1.0, size)
+        if cand.size * ud.size <= discs.DENSE_LSA:
+            mt, md = discs.dense_optimal(last_xy, dxy, r2, 1.0, size)
         else:
-            ti, dj, cost = fast_assoc.gate_pairs(last_xy, dxy, r2, 1.0, size)
-            mt, md = fast_assoc.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
+            ti, dj, cost = discs.gate_pairs(last_xy, dxy, r2, 1.0, size)
+            mt, md = discs.optimal(ti, dj, cost, cand.size, ud.size, 1.0)
         return cand[mt], ud[md]
 
-    def _size_term(self, twh: FloatArray, dwh: FloatArray) -> fast_assoc.SizeTerm | None:
+    def _size_term(self, twh: FloatArray, dwh: FloatArray) -> discs.SizeTerm | None:
         """The size term (``size_weight``) and size gate (``size_gate``) of a Euclidean stage
         for tracks of box sizes ``twh`` against detections of sizes ``dwh``, or ``None``."""
         if self._size_gate is not None:
