@@ -1,7 +1,8 @@
 """The tracker's fast paths equal the general code they replace.
 
-- :class:`FastCVPredictor` (closed-form per-axis CV Kalman) against ``kalman-cv`` of
-  :mod:`mvtrack.filters.predictors` (batched matrix Kalman filter, Joseph form).
+- ``kalman-cv`` (:class:`mvtrack.filters.cv.KalmanCVPredictor`, the closed-form per-axis CV
+  Kalman filter) against the general per-axis Kalman filter of
+  :mod:`mvtrack.filters.predictors` on the same model.
 - :mod:`mvtrack.association.discs` against :mod:`mvtrack.association` (gating values and the
   penalised optimal assignment), and against brute force on tiny problems.
 """
@@ -15,15 +16,29 @@ import pytest
 
 from mvtrack.association import TrackView, assign, candidate_pairs
 from mvtrack.association import discs as fa
-from mvtrack.filters.predictors import make_predictor
-from mvtrack.tracking.fastkf import FastCVPredictor
+from mvtrack.filters.cv import KalmanCVPredictor
+from mvtrack.filters.models import constant_velocity
+from mvtrack.filters.predictors import PerAxisKalmanPredictor, make_predictor
 
 
-@pytest.mark.parametrize("params", [{}, {"q": 0.3, "r": 4.0, "vel_var": 9.0}])
+def _general_cv(
+    q: float = 0.1, r: float = 1.0, vel_var: float = 25.0, dt: float = 1.0
+) -> PerAxisKalmanPredictor:
+    """The oracle: the general per-axis Kalman filter on ``kalman-cv``'s model."""
+    return PerAxisKalmanPredictor(constant_velocity(dt, q, r), vel_var, name="kalman-cv")
+
+
+def test_make_predictor_kalman_cv_is_the_closed_form() -> None:
+    assert type(make_predictor("kalman-cv", q=0.3)) is KalmanCVPredictor
+
+
+@pytest.mark.parametrize(
+    "params", [{}, {"q": 0.3, "r": 4.0, "vel_var": 9.0}, {"q": 0.3, "dt": 0.5}]
+)
 def test_fast_cv_equals_the_general_kalman_cv_over_a_random_run(params: dict) -> None:
     rng = np.random.default_rng(5)
-    fast = FastCVPredictor(**params)
-    ref = make_predictor("kalman-cv", **params)
+    fast = KalmanCVPredictor(**params)
+    ref = _general_cv(**params)
     xy0 = rng.uniform(0, 500, (6, 2))
     a, b = fast.init(xy0), ref.init(xy0)
     for k in range(40):
@@ -40,10 +55,11 @@ def test_fast_cv_equals_the_general_kalman_cv_over_a_random_run(params: dict) ->
         np.testing.assert_allclose(
             fast.position_cov(a), ref.position_cov(b), rtol=1e-9, atol=1e-12
         )
+        np.testing.assert_allclose(fast.covariance(a), ref.covariance(b), rtol=1e-9, atol=1e-9)
 
 
 def test_fast_cv_rows_without_measurement_keep_the_prediction() -> None:
-    f = FastCVPredictor(q=0.5, r=2.0)
+    f = KalmanCVPredictor(q=0.5, r=2.0)
     s = f.predict(f.init(np.array([[0.0, 0.0], [10.0, 10.0]])))
     z = np.array([[1.0, 1.0], [np.nan, np.nan]])
     u = f.update(s, z, np.array([True, True]))
@@ -176,9 +192,9 @@ def test_gate_pairs_with_per_axis_factors_equal_a_hand_computed_ellipse(n, m, sp
 
 def test_fast_cv_with_per_track_r_equals_kalman_cv_with_each_r() -> None:
     rng = np.random.default_rng(3)
-    fast = FastCVPredictor(q=0.2, r=4.0, vel_var=9.0)
+    fast = KalmanCVPredictor(q=0.2, r=4.0, vel_var=9.0)
     r = np.array([4.0, 36.0, 100.0])
-    refs = [make_predictor("kalman-cv", q=0.2, r=float(v), vel_var=9.0) for v in r]
+    refs = [_general_cv(q=0.2, r=float(v), vel_var=9.0) for v in r]
     xy0 = rng.uniform(0, 300, (3, 2))
     a = fast.init(xy0, r)
     b = [p.init(xy0[i : i + 1]) for i, p in enumerate(refs)]
@@ -303,7 +319,7 @@ def test_table_and_state_slices_equal_the_gathered_rows() -> None:
         a, b = tab.take(slice(0, stop)), tab.take(np.arange(stop))
         np.testing.assert_array_equal(a.ints, b.ints)
         np.testing.assert_array_equal(a.floats, b.floats)
-    fast = FastCVPredictor().init(rng.normal(size=(7, 2)))
+    fast = KalmanCVPredictor().init(rng.normal(size=(7, 2)))
     general = make_predictor("kalman-ca").init(rng.normal(size=(7, 2)))
     for state in (fast, general):
         a, b = tr.take_state(state, slice(0, 4)), tr.take_state(state, np.arange(4))

@@ -12,7 +12,6 @@
   term), composed from :mod:`mvtrack.association`.
 - :mod:`~mvtrack.tracking.lifecycle` — the state machine as pure functions over arrays.
 - :mod:`~mvtrack.tracking.log` — :class:`TrackLog` (all frames as arrays, MOTChallenge rows).
-- :mod:`~mvtrack.tracking.fastkf` — the closed-form ``kalman-cv`` used on the hot path.
 
 >>> from mvtrack.tracking import Tracker, TrackerConfig, track_detections
 """

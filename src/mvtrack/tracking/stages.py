@@ -37,8 +37,8 @@ from mvtrack.association.assign import assign as assign_pairs
 from mvtrack.association.distances import TrackView, get_distance
 from mvtrack.association.gating import candidate_pairs
 from mvtrack.association.regions import SHAPE_PARAMS, GateRegions, axis_shapes, gate_shapes
+from mvtrack.filters.cv import KalmanCVPredictor
 from mvtrack.tracking.config import TrackerConfig
-from mvtrack.tracking.fastkf import FastCVPredictor
 from mvtrack.tracking.lifecycle import TENTATIVE
 from mvtrack.tracking.scores import ScoreCalibration, duplicates
 from mvtrack.tracking.table import HITS, LAST_K, LAST_XY, STATE, WH, TrackTable
@@ -73,7 +73,7 @@ class Associator:
         if not self._distance_params:
             if config.distance == "euclidean":
                 self._fast_gate = "euclidean"
-            elif config.distance == "mahalanobis" and isinstance(predictor, FastCVPredictor):
+            elif config.distance == "mahalanobis" and isinstance(predictor, KalmanCVPredictor):
                 self._fast_gate = "mahalanobis"
         self._assign_params = dict(config.assign_params)
         sg = config.second_gate
@@ -84,7 +84,7 @@ class Associator:
         self.ref = None if ref is None else float(ref)
         self._inv_ref2 = None if ref is None else 1.0 / float(ref) ** 2
         #: whether the measurement variance scales with the box (closed-form kalman-cv only)
-        self.scale_r = self._inv_ref2 is not None and isinstance(predictor, FastCVPredictor)
+        self.scale_r = self._inv_ref2 is not None and isinstance(predictor, KalmanCVPredictor)
         # box-size term of the Euclidean costs (in the units of the position cost)
         self._size_w = float(config.size_weight) if self._fast_gate == "euclidean" else 0.0
         # size gate of the Euclidean stages (config.size_gate)

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.tracking.fastkf import CVState
+from mvtrack.filters.cv import CVState
 from mvtrack.types import Detections, concat_rows, take_rows
 
 FloatArray = NDArray[np.float64]

@@ -19,9 +19,8 @@ and §2.1 steps 3–5 (paper 2):
    tentative tracks from the unassigned detections (new-target recognition, SPEC §2.1 step 4);
    a coasting track's rows are output only for its first ``coast_output`` seconds.
 
-``kalman-cv`` runs in the closed form of :mod:`mvtrack.tracking.fastkf` (the same filter as
-:mod:`mvtrack.filters.predictors`' ``kalman-cv``, tested equal to 1e-9); every other predictor
-is built by :func:`mvtrack.filters.predictors.make_predictor`.
+Every predictor is built by :func:`mvtrack.filters.predictors.make_predictor`; the default
+``kalman-cv`` is the closed form of :mod:`mvtrack.filters.cv`.
 """
 
 from __future__ import annotations
@@ -36,7 +35,6 @@ from mvtrack.association.regions import GateRegions
 from mvtrack.filters.predictors import make_predictor
 from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.config import _round as _round_frames
-from mvtrack.tracking.fastkf import FastCVPredictor
 from mvtrack.tracking.lifecycle import (
     CONFIRMED,
     TENTATIVE,
@@ -80,12 +78,8 @@ __all__ = ["RescueFn", "TrackTable", "Tracker", "track_detections"]
 
 
 def _build_predictor(config: TrackerConfig) -> Any:
-    """The configured predictor; ``kalman-cv`` in its closed form when its parameters allow."""
-    params = _predictor_params(config)
-    if config.predictor == "kalman-cv" and set(params) <= {"q", "r", "vel_var"}:
-        make_predictor("kalman-cv", **params)  # same validation and error messages
-        return FastCVPredictor(**params)
-    return make_predictor(config.predictor, **params)
+    """The configured predictor (:func:`mvtrack.filters.predictors.make_predictor`)."""
+    return make_predictor(config.predictor, **_predictor_params(config))
 
 
 def _predictor_params(config: TrackerConfig) -> dict[str, Any]:
