@@ -62,6 +62,17 @@ SizeTerm = tuple[FloatArray, FloatArray, float] | tuple[FloatArray, FloatArray, 
 
 
 
+def size_term(
+    twh: FloatArray, dwh: FloatArray, weight: float, size_gate: float | None
+) -> SizeTerm | None:
+    """The box-size term of a Euclidean stage for tracks of box sizes ``twh`` against
+    detections of sizes ``dwh``: ``weight`` (``TrackerConfig.size_weight``) and the size gate
+    ``size_gate`` (``TrackerConfig.size_gate``), or ``None`` when there is neither."""
+    if size_gate is not None:
+        return (twh, dwh, weight, size_gate)
+    return (twh, dwh, weight) if weight else None
+
+
 def _cost(dx: FloatArray, dy: FloatArray, scale: FloatArray | None) -> FloatArray:
     """``Δᵀ S⁻¹ Δ`` for track rows along axis 0 of ``dx, dy`` (new array).
 

@@ -123,6 +123,39 @@ def _sorted(ti: IntArray, dj: IntArray, m: int) -> tuple[IntArray, IntArray]:
     return ti[order], dj[order]
 
 
+def size_factors2(wh: FloatArray, inv_ref2: float) -> FloatArray:
+    """Per-axis size factors squared of the gates, ``(f_x², f_y²) = max(1, (w, h)² /
+    size_ref²)`` (N, 2), ``inv_ref2 = 1 / size_ref²`` (1 for boxes without a size): a box
+    larger than ``size_ref`` stretches its Euclidean gate per axis."""
+    return np.fmax(wh * wh * inv_ref2, 1.0)  # fmax: NaN → 1
+
+
+def r_factor(f2: FloatArray) -> FloatArray:
+    """``max(f_x, f_y)²`` (N,): the factor of the measurement variance (the larger axis's,
+    so that the one isotropic variance covers the noisier axis)."""
+    return np.maximum(f2[:, 0], f2[:, 1])
+
+
+def warmup_centre(
+    pxy: FloatArray, hits: NDArray[np.int64], last_xy: FloatArray, prev_xy: FloatArray,
+    last_k: NDArray[np.int64], prev_k: NDArray[np.int64], k: int, warmup_hits: int,
+) -> FloatArray:
+    """Paper 1's warm-up gate centre (SPEC §1.1 [R]) instead of the prediction ``pxy``.
+
+    Until a track has ``warmup_hits`` (``2M = 6``) associations the gate centre is the linear
+    extrapolation of its last two measurements, ``2 y_k − y_{k−1}`` for consecutive frames
+    (scaled by the elapsed frames after misses), and ``y_k`` after a single association.
+    """
+    warm = hits < warmup_hits
+    if not np.count_nonzero(warm):
+        return pxy
+    span = np.maximum(last_k - prev_k, 1)[:, None]
+    gap = (k - last_k)[:, None]
+    last = last_xy
+    centre = last + (last - prev_xy) * (gap / span)  # 2y_k − y_{k−1}, SPEC §1.1 [R]
+    return np.where(warm[:, None], centre, pxy)
+
+
 def candidate_pairs(
     view: TrackView,
     dets: Detections | FloatArray,

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.association import discs
+from mvtrack.association import discs, gating
 from mvtrack.association.assign import assign as assign_pairs
 from mvtrack.association.distances import TrackView, get_distance
 from mvtrack.association.gating import candidate_pairs
@@ -108,7 +108,10 @@ class Associator:
         a box is larger than ``size_ref``)."""
         gxy = self.predictor.position(ps)
         if self._fp.warmup_hits:
-            gxy = self._warmup_centre(tab, gxy, k)
+            gxy = gating.warmup_centre(  # paper 1's 2 y_k − y_{k−1}, SPEC §1.1 [R]
+                gxy, tab.hits, tab.last_xy, tab.prev_xy, tab.last_k, tab.prev_k, k,
+                self._fp.warmup_hits,
+            )
         f2 = r_rows = None  # size factors, only when a box is larger than size_ref
         if self.ref is not None and np.count_nonzero(tab.floats[:, WH] > self.ref):
             f2 = self.size_scale2(tab.floats[:, WH])
@@ -339,38 +342,14 @@ class Associator:
         return cand[mt], ud[md]
 
     def _size_term(self, twh: FloatArray, dwh: FloatArray) -> discs.SizeTerm | None:
-        """The size term (``size_weight``) and size gate (``size_gate``) of a Euclidean stage
-        for tracks of box sizes ``twh`` against detections of sizes ``dwh``, or ``None``."""
-        if self._size_gate is not None:
-            return (twh, dwh, self._size_w, self._size_gate)
-        return (twh, dwh, self._size_w) if self._size_w else None
+        """The size term and size gate of a Euclidean stage (:func:`discs.size_term`)."""
+        return discs.size_term(twh, dwh, self._size_w, self._size_gate)
 
     def size_scale2(self, wh: FloatArray) -> FloatArray:
-        """Per-axis size factors squared, ``(f_x², f_y²) = max(1, (w, h)² / size_ref²)``, (N, 2)
-        (1 for boxes without a size)."""
-        return np.fmax(wh * wh * self._inv_ref2, 1.0)  # fmax: NaN → 1
+        """Per-axis size factors squared (:func:`gating.size_factors2`) for boxes ``wh``."""
+        return gating.size_factors2(wh, self._inv_ref2)
 
-    @staticmethod
-    def r_factor(f2: FloatArray) -> FloatArray:
-        """``max(f_x, f_y)²`` (N,): the factor of the measurement variance (the larger axis's,
-        so that the one isotropic variance covers the noisier axis)."""
-        return np.maximum(f2[:, 0], f2[:, 1])
-
-    def _warmup_centre(self, tab: TrackTable, pxy: FloatArray, k: int) -> FloatArray:
-        """Paper 1's warm-up gate centre (SPEC §1.1 [R]).
-
-        Until a track has ``2M = 6`` associations the gate centre is the linear extrapolation
-        of its last two measurements, ``2 y_k − y_{k−1}`` for consecutive frames (scaled by the
-        elapsed frames after misses), and ``y_k`` after a single association.
-        """
-        warm = tab.hits < self._fp.warmup_hits
-        if not np.count_nonzero(warm):
-            return pxy
-        span = np.maximum(tab.last_k - tab.prev_k, 1)[:, None]
-        gap = (k - tab.last_k)[:, None]
-        last = tab.last_xy
-        centre = last + (last - tab.prev_xy) * (gap / span)  # 2y_k − y_{k−1}, SPEC §1.1 [R]
-        return np.where(warm[:, None], centre, pxy)
+    r_factor = staticmethod(gating.r_factor)
 
     def regions(self, tab: TrackTable, ps: Any, k: int) -> GateRegions:
         """The gates of the tracks ``tab`` with predicted state ``ps`` at step ``k``
