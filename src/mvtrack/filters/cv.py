@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mvtrack.filters.base import BoolArray, FloatArray, check_xy
+from mvtrack.filters.base import BoolArray, FloatArray, check_shapes, check_xy
 from mvtrack.filters.models import check_positive
 
 #: the columns of ``(a, b, c)`` that multiply the innovation of ``(px, py, vx, vy)`` in the gain
@@ -119,13 +119,7 @@ class KalmanCVPredictor:
         ``r`` (N,), optional: per-track measurement variances instead of ``self.r``.
         """
         x, P = state.x, state.P
-        n = x.shape[0]
-        z = np.asarray(z, dtype=np.float64)
-        if z.shape != (n, 2):
-            raise ValueError(f"z must have shape ({n}, 2), got {z.shape}")
-        mask = np.asarray(mask)
-        if mask.shape != (n,) or mask.dtype != np.bool_:
-            raise ValueError(f"mask must be a boolean array of shape ({n},), got {mask.shape}")
+        z, mask = check_shapes(z, mask, x.shape[0])
         nu = z - x[:, :2]  # innovation per axis (NaN where missing)
         both = nu[:, 0] + nu[:, 1]
         ok = mask & (both == both)  # and neither coordinate NaN
