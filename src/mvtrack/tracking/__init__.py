@@ -4,7 +4,9 @@
   ``fps``) and the presets :func:`paper1`, :func:`paper2`, :func:`default` (:data:`PRESETS`,
   :func:`preset`).
 - :mod:`~mvtrack.tracking.tracker` — :class:`Tracker` (``step(dets, rescue=None) ->
-  TrackFrame``: predict, associate, update, life cycle, births) and :func:`track_detections`.
+  TrackFrame``: predict, associate, update, life cycle, births).
+- :mod:`~mvtrack.tracking.offline` — :func:`track_detections`: a detection file, offline
+  (backfill, interpolation, short tracks dropped).
 - :mod:`~mvtrack.tracking.table` — the struct-of-arrays :class:`TrackTable` and its row
   operations.
 - :mod:`~mvtrack.tracking.stages` — :class:`~mvtrack.tracking.stages.Associator`: the
@@ -18,8 +20,9 @@
 
 from mvtrack.tracking.config import PRESETS, TrackerConfig, default, paper1, paper2, preset
 from mvtrack.tracking.log import TrackLog
+from mvtrack.tracking.offline import track_detections
 from mvtrack.tracking.table import TrackTable
-from mvtrack.tracking.tracker import Tracker, track_detections
+from mvtrack.tracking.tracker import Tracker
 
 __all__ = [
     "PRESETS",
