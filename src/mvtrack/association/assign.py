@@ -223,17 +223,25 @@ def _solve_dense(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDAr
     return chosen
 
 
-def solve_sparse(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDArray[np.bool_]:
+def solve_sparse(
+    t: IntArray, d: IntArray, c: FloatArray, half_u: float,
+    ranks: tuple[int, IntArray, int, IntArray] | None = None,
+) -> NDArray[np.bool_]:
     """Optimal exclusive matching of any number of clusters in one sparse LAPJVsp solve.
 
     Rows: tracks, then one dummy per detection; columns: detections, then one dummy per track.
     Edges: real pairs (cost), track → own dummy (u/2), detection dummy → detection (u/2), and
     the transposed pattern between dummies (0) so a perfect matching always exists. A constant
     offset keeps every weight non-zero (it adds the same amount to every perfect matching).
+    ``ranks = (nt, lt, nd, ld)``, optional: the numbers of distinct tracks and detections and
+    each pair's ranks among them, when the caller has them (``np.unique`` otherwise).
     """
-    ut, lt = np.unique(t, return_inverse=True)
-    ud, ld = np.unique(d, return_inverse=True)
-    nt, nd = ut.size, ud.size
+    if ranks is None:
+        ut, lt = np.unique(t, return_inverse=True)
+        ud, ld = np.unique(d, return_inverse=True)
+        nt, nd = ut.size, ud.size
+    else:
+        nt, lt, nd, ld = ranks
     p = t.shape[0]
     off = 1.0 + max(0.0, -float(c.min()))
     at = np.arange(nt)
@@ -243,7 +251,7 @@ def solve_sparse(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDAr
     w = np.concatenate(
         [c + off, np.full(nt, half_u + off), np.full(nd, half_u + off), np.full(p, off)]
     )
-    g = csr_array(coo_array((w, (rows, cols)), shape=(nt + nd, nd + nt)))
+    g = csr_array((w, (rows, cols)), shape=(nt + nd, nd + nt))
     r, k = min_weight_full_bipartite_matching(g)
     real = (r < nt) & (k < nd)
     key = lt.astype(np.int64) * nd + ld

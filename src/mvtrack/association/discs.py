@@ -358,4 +358,4 @@ def _solve_conflicts(
         rows, cols = linear_sum_assignment(a)
         got = pos[rows, cols]
         return got[got >= 0]
-    return solve_sparse(t, d, c, half_u).nonzero()[0]  # the same problem, sparse
+    return solve_sparse(t, d, c, half_u, (nt, lt, nd, ld)).nonzero()[0]  # the same, sparse

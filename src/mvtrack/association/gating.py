@@ -76,9 +76,10 @@ def spatial_pairs(
     finite = np.isfinite(radius)
     ref = 1.25 * float(np.median(radius[finite])) if finite.any() else 1.0
     lo = np.minimum(txy.min(axis=0), dxy.min(axis=0))
-    extent = float((np.maximum(txy.max(axis=0), dxy.max(axis=0)) - lo).max())
-    # cells no narrower than extent / 65536, so that the cell keys stay far below 2**63
-    cell = max(float(radius[radius <= ref].max(initial=0.0)), extent / 65536.0, 1e-6)
+    cell = max(float(radius[radius <= ref].max(initial=0.0)), 1e-6)
+    if cell < 1.0:  # cells no narrower than extent / 65536: the keys stay far below 2**63
+        extent = float((np.maximum(txy.max(axis=0), dxy.max(axis=0)) - lo).max())
+        cell = max(cell, extent / 65536.0)
     dc = ((dxy - lo) // cell).astype(np.int64)
     width = int(max(dc[:, 0].max(), ((txy[:, 0] - lo[0]) // cell).max())) + 3
     dkey = (dc[:, 1] + 1) * width + dc[:, 0] + 1
