@@ -154,7 +154,8 @@ def test_ctrl_c_in_a_terminal_stops_workers_and_exits_130(videos, tmp_path) -> N
     import sys
     import time
 
-    psutil = pytest.importorskip("psutil")  # installed with distributed
+    import psutil  # installed with distributed
+
     folder = tmp_path / "in"
     folder.mkdir()
     full = write_video(x4_nine_vehicles(), folder / "v0.mp4", progress=False)

@@ -10,11 +10,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import motmetrics as mm
 import pytest
 
 from mvtrack.cli import main
 
-mm = pytest.importorskip("motmetrics")
 CAMPUS = Path(mm.__file__).parent / "data" / "TUD-Campus"
 STADTMITTE = Path(mm.__file__).parent / "data" / "TUD-Stadtmitte"
 

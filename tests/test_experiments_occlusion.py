@@ -69,8 +69,8 @@ def test_occlusion_experiment_report(tmp_path, monkeypatch) -> None:
     monkeypatch.setattr(occlusion, "RATIOS", (1.0, 0.01, 0.001, 0.0))
     report = get("occlusion")(runs=1, seed=0)
     fig = report.figures
+    # the occlusion degree peaks at the paper's frame 126 (Fig. 10), within the plateau
     assert 125 <= fig["alpha_peak_frame"] <= 128 and 126 in fig["alpha_peak_frames"]
-    assert fig["paper"]["alpha_peak_frame"] == 126
     assert fig["segmentation_parts_found"] == 3
     assert fig["part3_never_lost"] and fig["third_term_rises_as_second_falls"]
     # golden figures of seed 0: E3.12 beats the independent KFs by ~2× but misses the 7 px

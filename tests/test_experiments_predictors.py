@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import cv2
 import numpy as np
 import pytest
 
@@ -66,7 +67,10 @@ def test_report_has_keys_and_sane_values(tmp_path) -> None:
     paths = write_report(report, tmp_path)
     data = json.loads((tmp_path / "predictors.json").read_text())
     assert data["kf_mse"] == pytest.approx(fig["kf_mse"])
-    assert (tmp_path / "predictors_fig8_ensemble_mse.png").stat().st_size > 1000
+    img = cv2.imread(str(tmp_path / "predictors_fig8_ensemble_mse.png"))
+    assert img is not None and img.ndim == 3
+    # the KF and RLS curves are drawn in colour (the axes, labels and background are grey)
+    assert np.count_nonzero(img.max(axis=2).astype(int) - img.min(axis=2) > 60) > 200
     assert (tmp_path / "predictors.md").read_text().startswith("# X1")
     assert len(paths) == 2 + len(report.plots)
 

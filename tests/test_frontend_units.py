@@ -159,7 +159,8 @@ def test_temporal_median_removes_a_person_present_in_a_minority_of_frames() -> N
 
 
 def test_supervision_detections_both_ways() -> None:
-    sv = pytest.importorskip("supervision")
+    import supervision as sv  # a test dependency (pyproject: test extra)
+
     det = sv.Detections(
         xyxy=np.array([[10, 20, 50, 120], [100, 0, 130, 60]], np.float32),
         confidence=np.array([0.9, 0.4], np.float32),

@@ -12,12 +12,12 @@ import hashlib
 from importlib import metadata
 from pathlib import Path
 
+import motmetrics as mm
 import pytest
 
 import reference.trackeval as vendored
 from mvtrack.eval.metrics import evaluate
 
-mm = pytest.importorskip("motmetrics")
 TUD = Path(mm.__file__).parent / "data"
 
 #: TrackEval 1.3.0's own pipeline (``trackeval.Evaluator`` with ``MotChallenge2DBox``,

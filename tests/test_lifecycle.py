@@ -6,18 +6,8 @@ import numpy as np
 import pytest
 
 from mvtrack.tracking import TrackerConfig, TrackLog, paper1, paper2, preset
-from mvtrack.tracking.lifecycle import (
-    AGE,
-    HITS,
-    MISSES,
-    STATE,
-    TID,
-    UID,
-    birth_order,
-    count_hits,
-    hand_out_ids,
-    next_state,
-)
+from mvtrack.tracking.lifecycle import birth_order, count_hits, hand_out_ids, next_state
+from mvtrack.tracking.table import AGE, HITS, MISSES, STATE, TID, UID
 from mvtrack.types import TrackFrame, TrackState
 
 T, C, K, S = (int(s) for s in (TrackState.TENTATIVE, TrackState.CONFIRMED,

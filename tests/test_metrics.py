@@ -13,6 +13,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import motmetrics as mm
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -22,7 +23,6 @@ from mvtrack.eval.iou import iou_matrix, overlapping_pairs
 from mvtrack.eval.metrics import evaluate, score_sequence
 from mvtrack.io.mot import MotTable, read_tracks, write_mot, write_results
 
-mm = pytest.importorskip("motmetrics")
 TUD = Path(mm.__file__).parent / "data"
 SEQS = ("TUD-Campus", "TUD-Stadtmitte")
 REAL = ("TUD-Campus", "TUD-Stadtmitte", "ADL-Rundle-6", "KITTI-17")

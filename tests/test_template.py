@@ -252,7 +252,6 @@ def _stop_and_go(n: int, stop: int, go: int, enter: int = 15):
 
 
 def _run(with_templates: bool, n: int = 200, stop: int = 45, go: int = 185):
-    pytest.importorskip("mvtrack.tracking.tracker")
     from mvtrack import tracking
     from mvtrack.detection import DisturbanceMap
 
@@ -310,7 +309,6 @@ def test_without_templates_the_stopped_vehicle_track_ends() -> None:
 
 
 def test_gate_radius_follows_a_euclidean_tracker_gate() -> None:
-    pytest.importorskip("mvtrack.tracking.tracker")
     from mvtrack import tracking
 
     tracker = tracking.Tracker(tracking.paper1(fps=30, gate_px=10.0))
@@ -339,7 +337,6 @@ def test_masked_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None
 
 
 def test_search_radius_is_capped_by_max_radius() -> None:
-    pytest.importorskip("mvtrack.tracking.tracker")
     from mvtrack import tracking
 
     tracker = tracking.Tracker(tracking.paper1(fps=30, gate_px=20.0))
@@ -359,7 +356,6 @@ def test_search_radius_is_capped_by_max_radius() -> None:
 def test_observe_maps_rows_by_row_uids_or_by_public_id_alike() -> None:
     """The rescuer stores a frame's detected boxes under the tracker's uids, whether it reads
     them from ``tracker.row_uids`` or looks them up by public ID."""
-    pytest.importorskip("mvtrack.tracking.tracker")
     from types import SimpleNamespace
 
     from mvtrack import tracking
@@ -383,7 +379,6 @@ def test_observe_maps_rows_by_row_uids_or_by_public_id_alike() -> None:
 
 
 def test_build_rescuer_gives_the_bank_the_detectors_mask_and_min_pixels() -> None:
-    pytest.importorskip("mvtrack.tracking.tracker")
     from mvtrack.config import RunSettings
     from mvtrack.detection import DisturbanceMap
     from mvtrack.video import build_rescuer, build_tracker

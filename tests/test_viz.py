@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -103,7 +104,8 @@ def test_rotated_gate_ellipse_is_drawn_along_its_major_axis() -> None:
 
 
 def test_coupled_gate_shape_agrees_with_the_coupled_distance() -> None:
-    distances = pytest.importorskip("mvtrack.association.distances")
+    from mvtrack.association import distances
+
     rng = np.random.default_rng(7)
     k = 12
     xy = rng.uniform(50, 200, size=(k, 2))
@@ -179,7 +181,10 @@ def test_trajectory_figure_and_rows(tmp_path) -> None:
     assert rows.state_histogram()["coasting"] == 10
     fig = trajectory_figure(rows, (100, 80), background=np.zeros((80, 100, 3), np.uint8))
     save_figure(fig, tmp_path / "traj.png")
-    assert (tmp_path / "traj.png").stat().st_size > 1000
+    img = cv2.imread(str(tmp_path / "traj.png"))
+    assert img.ndim == 3 and min(img.shape[:2]) > 80  # the figure holds the 100 × 80 frame
+    # the two trajectories are drawn in colour on the black frame (no colour without tracks)
+    assert np.count_nonzero(img.max(axis=2).astype(int) - img.min(axis=2) > 60) > 100
     assert sorted(p.name for p in tmp_path.iterdir()) == ["traj.png"]
 
 

@@ -3,7 +3,10 @@
 - :mod:`~mvtrack.association.distances` — :class:`TrackView` and the distances by name
   (:data:`DISTANCES`: ``euclidean``, ``uncoupled``, ``coupled``, ``coupled-literal``,
   ``mahalanobis``, ``iou``) with their default gates.
-- :mod:`~mvtrack.association.gating` — :func:`candidate_pairs`: spatially pre-gated pairs.
+- :mod:`~mvtrack.association.gating` — :func:`candidate_pairs`: spatially pre-gated pairs
+  (the one spatial index, :func:`~mvtrack.association.gating.spatial_pairs`).
+- :mod:`~mvtrack.association.discs` — gating and the tiered optimal assignment for
+  disc-shaped gates (Euclidean, isotropic Mahalanobis): the tracker's default path.
 - :mod:`~mvtrack.association.assign` — :func:`assign` with rules ``nearest``, ``greedy``,
   ``optimal``.
 - :mod:`~mvtrack.association.explain` — :func:`explain`: why a detection was not associated.

@@ -107,7 +107,7 @@ def _finish(t: IntArray, d: IntArray, c: FloatArray, n_tracks: int, n_dets: int)
     )
 
 
-def _first_per_group(group: IntArray) -> NDArray[np.bool_]:
+def first_per_group(group: IntArray) -> NDArray[np.bool_]:
     """For a sorted ``group`` array, True at the first element of each run."""
     first = np.ones(group.shape[0], dtype=bool)
     first[1:] = group[1:] != group[:-1]
@@ -223,17 +223,25 @@ def _solve_dense(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDAr
     return chosen
 
 
-def _solve_sparse(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDArray[np.bool_]:
+def solve_sparse(
+    t: IntArray, d: IntArray, c: FloatArray, half_u: float,
+    ranks: tuple[int, IntArray, int, IntArray] | None = None,
+) -> NDArray[np.bool_]:
     """Optimal exclusive matching of any number of clusters in one sparse LAPJVsp solve.
 
     Rows: tracks, then one dummy per detection; columns: detections, then one dummy per track.
     Edges: real pairs (cost), track → own dummy (u/2), detection dummy → detection (u/2), and
     the transposed pattern between dummies (0) so a perfect matching always exists. A constant
     offset keeps every weight non-zero (it adds the same amount to every perfect matching).
+    ``ranks = (nt, lt, nd, ld)``, optional: the numbers of distinct tracks and detections and
+    each pair's ranks among them, when the caller has them (``np.unique`` otherwise).
     """
-    ut, lt = np.unique(t, return_inverse=True)
-    ud, ld = np.unique(d, return_inverse=True)
-    nt, nd = ut.size, ud.size
+    if ranks is None:
+        ut, lt = np.unique(t, return_inverse=True)
+        ud, ld = np.unique(d, return_inverse=True)
+        nt, nd = ut.size, ud.size
+    else:
+        nt, lt, nd, ld = ranks
     p = t.shape[0]
     off = 1.0 + max(0.0, -float(c.min()))
     at = np.arange(nt)
@@ -243,7 +251,7 @@ def _solve_sparse(t: IntArray, d: IntArray, c: FloatArray, half_u: float) -> NDA
     w = np.concatenate(
         [c + off, np.full(nt, half_u + off), np.full(nd, half_u + off), np.full(p, off)]
     )
-    g = csr_array(coo_array((w, (rows, cols)), shape=(nt + nd, nd + nt)))
+    g = csr_array((w, (rows, cols)), shape=(nt + nd, nd + nt))
     r, k = min_weight_full_bipartite_matching(g)
     real = (r < nt) & (k < nd)
     key = lt.astype(np.int64) * nd + ld
@@ -380,7 +388,7 @@ def _optimal(
         tri = np.flatnonzero(trivial[lab])
         if tri.size:
             order = tri[np.lexsort((d[tri], t[tri], c[tri], lab[tri]))]
-            chosen[rest[order[_first_per_group(lab[order])]]] = True
+            chosen[rest[order[first_per_group(lab[order])]]] = True
         # conflicting clusters (at least two tracks and two detections)
         hard = np.flatnonzero(~trivial[lab])
         if hard.size:
@@ -403,11 +411,11 @@ def _optimal(
             elif solver == "sparse" or (
                 solver == "auto" and (n_hard > SPARSE_CLUSTERS or largest > SMALL_NODES)
             ):
-                sel = _solve_sparse(t[hard], d[hard], c[hard], u / 2)
+                sel = solve_sparse(t[hard], d[hard], c[hard], u / 2)
                 chosen[rest[hard[sel]]] = True
             else:
                 order = hard[np.argsort(lab[hard], kind="stable")]
-                bounds = np.flatnonzero(_first_per_group(lab[order]))
+                bounds = np.flatnonzero(first_per_group(lab[order]))
                 for s, e in zip(bounds, [*bounds[1:], order.size], strict=True):
                     idx = order[s:e]
                     chosen[rest[idx[_solve_dense(t[idx], d[idx], c[idx], u / 2)]]] = True

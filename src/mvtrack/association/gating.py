@@ -1,10 +1,13 @@
 """Gating: the (track, detection) pairs whose distance passes the gate, near-linear in N.
 
-Two stages. A *spatial pre-gate* keeps only pairs whose centre distance is within each track's
-radius bound (:func:`mvtrack.association.distances.gate_radius`), found on a uniform grid hash
-of the detections (a KD-tree, :class:`scipy.spatial.cKDTree`, for the few unusually wide
-gates); then the exact distance is computed on those pairs only and the gate applied. Small
-problems skip the pre-gate and evaluate every pair.
+Two stages. A *spatial pre-gate* proposes the pairs whose centre distance may be within each
+track's radius bound (:func:`mvtrack.association.distances.gate_radius`): the one spatial
+index of the package, :func:`spatial_pairs` (a uniform grid of the detections, a KD-tree,
+:class:`scipy.spatial.cKDTree`, for the few unusually wide gates), or :func:`band_pairs` (a
+vertical band, for medium problems of the disc-gate path); then the exact distance is
+computed on those pairs only and the gate applied. Small problems skip the pre-gate and
+evaluate every pair. :func:`candidate_pairs` serves every distance;
+:mod:`mvtrack.association.discs` uses the same pre-gates for the disc-shaped gates.
 """
 
 from __future__ import annotations
@@ -36,92 +39,122 @@ def _all_pairs(n: int, m: int) -> tuple[IntArray, IntArray]:
     return ti, dj
 
 
-def _expand_ranges(owner: IntArray, lo: IntArray, hi: IntArray) -> tuple[IntArray, IntArray]:
-    """All ``(owner[r], k)`` with ``lo[r] <= k < hi[r]``, vectorised (no loop over ranges)."""
-    counts = np.maximum(hi - lo, 0)
-    total = int(counts.sum())
-    rep = np.repeat(np.arange(owner.shape[0]), counts)
-    starts = np.cumsum(counts) - counts
-    pos = np.arange(total, dtype=np.intp) - starts[rep] + lo[rep]
-    return owner[rep], pos
+#: the 3 × 3 block of grid cells around a cell
+_NEIGHBOURS = np.array([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=np.int64)
 
 
-def _grid_pairs(
-    track_xy: FloatArray, det_xy: FloatArray, radius: FloatArray, idx: IntArray
-) -> tuple[IntArray, IntArray]:
-    """Pairs of tracks ``idx`` and detections within ``radius``, by a uniform grid hash.
-
-    Cells are ``max(radius[idx])`` wide, so a track's ball lies in its 3 × 3 block of cells.
-    Detections are sorted by cell key ``row * ncols + col``; the three cells of one block row
-    are contiguous in that order, so each track needs three ``searchsorted`` ranges. Everything
-    is array arithmetic over all tracks at once.
+def band_pairs(txy: FloatArray, dxy: FloatArray, rx: FloatArray) -> tuple[IntArray, IntArray]:
+    """Candidate pairs: every detection with ``|x_j − x_i| <= rx_i`` (a vertical band around
+    track ``i``), found by binary search in the detections sorted by x. The caller filters the
+    pairs by their exact distance; for a few hundred targets this is cheaper than the dense
+    ``N × M`` matrix and than the grid of :func:`spatial_pairs`.
     """
-    txy = track_xy[idx]
-    origin = np.minimum(txy.min(axis=0), det_xy.min(axis=0))
-    extent = float((np.maximum(txy.max(axis=0), det_xy.max(axis=0)) - origin).max())
-    cell = max(float(radius[idx].max()), extent / 65536.0, 1e-9)  # keys stay far below 2**63
-    dc = np.floor((det_xy - origin) / cell).astype(np.int64) + 1  # +1: neighbours stay >= 0
-    tc = np.floor((txy - origin) / cell).astype(np.int64) + 1
-    ncols = int(max(dc[:, 0].max(), tc[:, 0].max())) + 2
-    dkey = dc[:, 1] * ncols + dc[:, 0]
-    order = np.argsort(dkey, kind="stable")
-    skey = dkey[order]
-    rows = (tc[:, 1, None] + np.array([-1, 0, 1])) * ncols  # (K, 3) block rows
-    lo = np.searchsorted(skey, rows + (tc[:, 0, None] - 1), side="left").ravel()
-    hi = np.searchsorted(skey, rows + (tc[:, 0, None] + 1), side="right").ravel()
-    owner = np.repeat(idx, 3)
-    ti, pos = _expand_ranges(owner, lo, hi)
-    dj = order[pos]
-    d = det_xy[dj] - track_xy[ti]
-    keep = np.einsum("pi,pi->p", d, d) <= radius[ti] ** 2
-    return ti[keep], dj[keep].astype(np.intp)
+    order = np.argsort(dxy[:, 0], kind="stable")
+    xs = dxy[:, 0].take(order)
+    tx = txy[:, 0]
+    start = np.searchsorted(xs, tx - rx, side="left")
+    count = np.searchsorted(xs, tx + rx, side="right") - start
+    np.maximum(count, 0, out=count)  # a NaN radius or position finds nothing
+    total = int(count.sum())
+    ti = np.repeat(np.arange(txy.shape[0]), count)
+    # positions start[i], start[i] + 1, ... for every track i
+    run_start = np.repeat(start - (np.cumsum(count) - count), count)
+    return ti, order[run_start + np.arange(total)]
 
 
-def _spatial_pairs(
-    track_xy: FloatArray, det_xy: FloatArray, radius: FloatArray
+def spatial_pairs(
+    txy: FloatArray, dxy: FloatArray, radius: FloatArray
 ) -> tuple[IntArray, IntArray]:
-    """Pairs with ``|det − track| <= radius[track]``, sorted by track then detection.
+    """Candidate pairs: every detection within ``radius_i`` of track ``i`` (and a few more).
 
-    Tracks with a radius near the common one are found together on a uniform grid
-    (:func:`_grid_pairs`); tracks with a much larger radius (long coasting, huge covariance)
-    are queried one ball each in a KD-tree (:class:`scipy.spatial.cKDTree`), and unbounded
-    ones take every detection, so one wide gate does not widen every track's search.
+    Detections are sorted into square cells of side ``c`` (the largest radius up to 1.25
+    times the median); each track with ``radius_i <= c`` looks at the 3 × 3 cells around its
+    own, found by binary search in the sorted cell keys, so the work is proportional to the
+    number of tracks and candidate pairs. The few tracks with a wider gate (long coasting)
+    are queried in a KD-tree. The caller filters the pairs by their exact distance.
     """
-    n, m = track_xy.shape[0], det_xy.shape[0]
-    if n == 0 or m == 0:
-        e = np.zeros(0, dtype=np.intp)
-        return e, e.copy()
-    rmin, rmax = float(radius.min()), float(radius.max())
-    if np.isfinite(rmax) and rmax <= 2.0 * rmin:  # the usual case: one common radius scale
-        ti, dj = _grid_pairs(track_xy, det_xy, radius, np.arange(n))
-        order = np.argsort(ti.astype(np.int64) * m + dj, kind="stable")
-        return ti[order], dj[order]
     finite = np.isfinite(radius)
-    ref = np.median(radius[finite]) if finite.any() else 0.0
-    common = finite & (radius <= 2.0 * ref)
-    parts_t: list[IntArray] = []
-    parts_d: list[IntArray] = []
-    idx_common = np.flatnonzero(common)
-    if idx_common.size:
-        t, d = _grid_pairs(track_xy, det_xy, radius, idx_common)
-        parts_t.append(t)
-        parts_d.append(d)
-    idx_wide = np.flatnonzero(finite & ~common)
-    if idx_wide.size:  # few tracks: one ball query each, flattened without a Python loop body
-        balls = cKDTree(det_xy).query_ball_point(track_xy[idx_wide], radius[idx_wide])
-        counts = np.fromiter((len(b) for b in balls), dtype=np.intp, count=idx_wide.size)
-        parts_t.append(np.repeat(idx_wide, counts))
-        parts_d.append(
-            np.fromiter((j for b in balls for j in b), dtype=np.intp, count=int(counts.sum()))
+    ref = 1.25 * float(np.median(radius[finite])) if finite.any() else 1.0
+    lo = np.minimum(txy.min(axis=0), dxy.min(axis=0))
+    cell = max(float(radius[radius <= ref].max(initial=0.0)), 1e-6)
+    if cell < 1.0:  # cells no narrower than extent / 65536: the keys stay far below 2**63
+        extent = float((np.maximum(txy.max(axis=0), dxy.max(axis=0)) - lo).max())
+        cell = max(cell, extent / 65536.0)
+    dc = ((dxy - lo) // cell).astype(np.int64)
+    width = int(max(dc[:, 0].max(), ((txy[:, 0] - lo[0]) // cell).max())) + 3
+    dkey = (dc[:, 1] + 1) * width + dc[:, 0] + 1
+    order = np.argsort(dkey, kind="stable")
+    narrow = (radius <= cell).nonzero()[0]
+    tc = ((txy[narrow] - lo) // cell).astype(np.int64) + 1
+    keys = ((tc[:, 1, None] + _NEIGHBOURS[:, 1]) * width + tc[:, 0, None] + _NEIGHBOURS[:, 0])
+    keys = keys.ravel()
+    n_cells = int(max(dkey.max(), keys.max(initial=0))) + 2
+    if n_cells <= 8 * (keys.size + dkey.size) + 4096:  # a table of cell starts
+        first = np.zeros(n_cells + 1, dtype=np.int64)
+        np.cumsum(np.bincount(dkey, minlength=n_cells), out=first[1:])
+        keys = np.maximum(keys, 0)
+        start = first[keys]
+        count = first[keys + 1] - start
+    else:  # sparse extent (an outlier far away): binary search in the sorted keys
+        skey = dkey[order]
+        start = np.searchsorted(skey, keys, side="left")
+        count = np.searchsorted(skey, keys, side="right") - start
+    total = int(count.sum())
+    ti = np.repeat(np.repeat(narrow, 9), count)
+    # positions start[r], start[r] + 1, ... for every (track, cell) run r
+    run_start = np.repeat(start - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
+    dj = order[run_start + np.arange(total)]
+    wide = (~(radius <= cell)).nonzero()[0]
+    if wide.size:
+        tree = cKDTree(dxy)
+        r = np.where(np.isfinite(radius[wide]), radius[wide], np.inf)
+        balls = tree.query_ball_point(txy[wide], np.minimum(r, 1e12))
+        counts = np.fromiter((len(b) for b in balls), dtype=np.intp, count=wide.size)
+        ti = np.concatenate([ti, np.repeat(wide, counts)])
+        dj = np.concatenate(
+            [dj, np.fromiter((j for b in balls for j in b), dtype=np.intp,
+                             count=int(counts.sum()))]
         )
-    idx_inf = np.flatnonzero(~finite)
-    if idx_inf.size:
-        parts_t.append(np.repeat(idx_inf, m))
-        parts_d.append(np.tile(np.arange(m, dtype=np.intp), idx_inf.size))
-    ti = np.concatenate(parts_t)
-    dj = np.concatenate(parts_d)
+    return ti.astype(np.intp), dj.astype(np.intp)
+
+
+def _sorted(ti: IntArray, dj: IntArray, m: int) -> tuple[IntArray, IntArray]:
+    """The pairs sorted by track, then detection (``m`` detections)."""
     order = np.argsort(ti.astype(np.int64) * m + dj, kind="stable")
     return ti[order], dj[order]
+
+
+def size_factors2(wh: FloatArray, inv_ref2: float) -> FloatArray:
+    """Per-axis size factors squared of the gates, ``(f_x², f_y²) = max(1, (w, h)² /
+    size_ref²)`` (N, 2), ``inv_ref2 = 1 / size_ref²`` (1 for boxes without a size): a box
+    larger than ``size_ref`` stretches its Euclidean gate per axis."""
+    return np.fmax(wh * wh * inv_ref2, 1.0)  # fmax: NaN → 1
+
+
+def r_factor(f2: FloatArray) -> FloatArray:
+    """``max(f_x, f_y)²`` (N,): the factor of the measurement variance (the larger axis's,
+    so that the one isotropic variance covers the noisier axis)."""
+    return np.maximum(f2[:, 0], f2[:, 1])
+
+
+def warmup_centre(
+    pxy: FloatArray, hits: NDArray[np.int64], last_xy: FloatArray, prev_xy: FloatArray,
+    last_k: NDArray[np.int64], prev_k: NDArray[np.int64], k: int, warmup_hits: int,
+) -> FloatArray:
+    """Paper 1's warm-up gate centre (SPEC §1.1 [R]) instead of the prediction ``pxy``.
+
+    Until a track has ``warmup_hits`` (``2M = 6``) associations the gate centre is the linear
+    extrapolation of its last two measurements, ``2 y_k − y_{k−1}`` for consecutive frames
+    (scaled by the elapsed frames after misses), and ``y_k`` after a single association.
+    """
+    warm = hits < warmup_hits
+    if not np.count_nonzero(warm):
+        return pxy
+    span = np.maximum(last_k - prev_k, 1)[:, None]
+    gap = (k - last_k)[:, None]
+    last = last_xy
+    centre = last + (last - prev_xy) * (gap / span)  # 2y_k − y_{k−1}, SPEC §1.1 [R]
+    return np.where(warm[:, None], centre, pxy)
 
 
 def candidate_pairs(
@@ -167,11 +200,11 @@ def candidate_pairs(
         raise ValueError(f"candidate_pairs: unknown method {method!r}")
     if not (np.isfinite(view.xy).all() and np.isfinite(det_xy).all()):
         raise ValueError("candidate_pairs: track or detection positions contain NaN or inf")
-    if method == "dense" or (method == "auto" and n * m <= DENSE_PAIRS):
+    if method == "dense" or n * m == 0 or (method == "auto" and n * m <= DENSE_PAIRS):
         ti, dj = _all_pairs(n, m)
     else:
         radius = gate_radius(dist, view, dets, g, **params)
-        ti, dj = _spatial_pairs(view.xy, det_xy, radius)
+        ti, dj = _sorted(*spatial_pairs(view.xy, det_xy, radius), m)
     cost = pair_distance(dist, view, dets, ti, dj, **params)
     keep = cost <= g  # NaN compares False
     return ti[keep], dj[keep], cost[keep]

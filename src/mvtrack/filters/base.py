@@ -56,3 +56,29 @@ class Predictor(Protocol):
     def innovation_cov(self, state: Any) -> FloatArray:
         """Innovation covariance S = H P̄ Hᵀ + R (N, 2, 2) of the next measurement."""
         ...
+
+
+def check_xy(name: str, xy: FloatArray) -> FloatArray:
+    """``xy`` as a float64 array of shape (K, 2) (ValueError otherwise)."""
+    a = np.asarray(xy, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 2:
+        raise ValueError(f"{name} must have shape (K, 2), got {a.shape}")
+    return a
+
+
+def check_shapes(z: FloatArray, mask: BoolArray, N: int) -> tuple[FloatArray, BoolArray]:
+    """``z`` as a float64 array of shape (N, 2) and ``mask`` a boolean array of shape (N,)
+    (ValueError otherwise)."""
+    z = np.asarray(z, dtype=np.float64)
+    if z.shape != (N, 2):
+        raise ValueError(f"z must have shape ({N}, 2), got {z.shape}")
+    m = np.asarray(mask)
+    if m.shape != (N,) or m.dtype != np.bool_:
+        raise ValueError(f"mask must be a boolean array of shape ({N},), got {m.shape}")
+    return z, m
+
+
+def check_z_mask(z: FloatArray, mask: BoolArray, N: int) -> tuple[FloatArray, BoolArray]:
+    """``z`` (N, 2) and the rows that carry a measurement (mask true and no NaN/inf)."""
+    z, m = check_shapes(z, mask, N)
+    return z, m & np.isfinite(z).all(axis=1)

@@ -9,7 +9,7 @@ parameters, and a per-track state that is a frozen dataclass of arrays with lead
 name               method
 =================  ==========================================================================
 ``kalman-ca``      per-axis constant-acceleration KF, paper 1 eqs. (3)–(9)
-``kalman-cv``      per-axis constant-velocity KF
+``kalman-cv``      per-axis constant-velocity KF in closed form (:mod:`mvtrack.filters.cv`)
 ``kalman-coupled`` one 2-D KF per track, x and y in one state (full 2×2 position covariance)
 ``rls``            per-axis RLS adaptive transversal predictor, paper 1 eqs. (10)–(15)
 =================  ==========================================================================
@@ -33,18 +33,19 @@ from typing import Any, Literal
 import numpy as np
 
 from mvtrack.filters import fast, rls
-from mvtrack.filters.base import BoolArray, FloatArray, Predictor
+from mvtrack.filters.base import BoolArray, FloatArray, Predictor, check_xy, check_z_mask
+from mvtrack.filters.cv import CVState, KalmanCVPredictor
 from mvtrack.filters.models import (
     LinearModel,
     check_positive,
     constant_acceleration,
-    constant_velocity,
     coupled,
 )
 
 __all__ = [
     "PREDICTORS",
     "AxisKalmanState",
+    "CVState",
     "CoupledKalmanPredictor",
     "KalmanCAPredictor",
     "KalmanCVPredictor",
@@ -54,24 +55,6 @@ __all__ = [
     "RLSPredictorState",
     "make_predictor",
 ]
-
-
-def _check_xy(name: str, xy: FloatArray) -> FloatArray:
-    a = np.asarray(xy, dtype=np.float64)
-    if a.ndim != 2 or a.shape[1] != 2:
-        raise ValueError(f"{name} must have shape (K, 2), got {a.shape}")
-    return a
-
-
-def _check_z_mask(z: FloatArray, mask: BoolArray, N: int) -> tuple[FloatArray, BoolArray]:
-    """``z`` (N, 2) and the rows that carry a measurement (mask true and no NaN/inf)."""
-    z = np.asarray(z, dtype=np.float64)
-    if z.shape != (N, 2):
-        raise ValueError(f"z must have shape ({N}, 2), got {z.shape}")
-    m = np.asarray(mask)
-    if m.shape != (N,) or m.dtype != np.bool_:
-        raise ValueError(f"mask must be a boolean array of shape ({N},), got {m.shape}")
-    return z, m & np.isfinite(z).all(axis=1)
 
 
 def _diag2(a: FloatArray) -> FloatArray:
@@ -169,7 +152,7 @@ class PerAxisKalmanPredictor:
 
     def init(self, xy: FloatArray) -> AxisKalmanState:
         """State of ``K`` new tracks at ``xy`` (K, 2): zero velocity, ``P₀ = diag(r, vel_var…)``."""
-        xy = _check_xy("xy", xy)
+        xy = check_xy("xy", xy)
         if not np.all(np.isfinite(xy)):
             raise ValueError("xy holds NaN or infinite values")
         K, n = xy.shape[0], self.model.n
@@ -189,7 +172,7 @@ class PerAxisKalmanPredictor:
     def update(self, state: AxisKalmanState, z: FloatArray, mask: BoolArray) -> AxisKalmanState:
         """Measurement update, eqs. (3)–(5); rows with mask False or NaN keep the prediction."""
         N = state.x.shape[0]
-        z, ok = _check_z_mask(z, mask, N)
+        z, ok = check_z_mask(z, mask, N)
         x, P = fast.kf_axis_update(_to_comp(state.x), _to_comp(state.P), _axes_flat(z), self.r,
                                    np.concatenate([ok, ok]))
         return AxisKalmanState(x=_from_comp(x, N), P=_from_comp(P, N))
@@ -241,27 +224,6 @@ class KalmanCAPredictor(PerAxisKalmanPredictor):
         super().__init__(constant_acceleration(dt, q, r), vel_var, acc_var, name="kalman-ca")
 
 
-class KalmanCVPredictor(PerAxisKalmanPredictor):
-    """``kalman-cv``: per-axis constant-velocity KF (:func:`constant_velocity` model).
-
-    Parameters
-    ----------
-    q : float
-        Variance of the white-noise acceleration (px²/frame⁴).
-    r : float
-        Measurement-noise variance (px²).
-    vel_var : float
-        Initial velocity variance.
-    dt : float
-        Frame interval (1 frame).
-    """
-
-    def __init__(
-        self, q: float = 0.1, r: float = 1.0, vel_var: float = 25.0, dt: float = 1.0
-    ) -> None:
-        super().__init__(constant_velocity(dt, q, r), vel_var, 1.0, name="kalman-cv")
-
-
 class CoupledKalmanPredictor:
     """``kalman-coupled``: one 2-D KF per track with state ``[x, y, vx, vy(, ax, ay)]``.
 
@@ -290,7 +252,7 @@ class CoupledKalmanPredictor:
 
     def init(self, xy: FloatArray) -> KalmanState:
         """State of ``K`` new tracks at ``xy`` (K, 2), zero velocity."""
-        xy = _check_xy("xy", xy)
+        xy = check_xy("xy", xy)
         if not np.all(np.isfinite(xy)):
             raise ValueError("xy holds NaN or infinite values")
         K, n = xy.shape[0], self.model.n
@@ -308,7 +270,7 @@ class CoupledKalmanPredictor:
 
     def update(self, state: KalmanState, z: FloatArray, mask: BoolArray) -> KalmanState:
         """Measurement update, eqs. (3)–(5); rows with mask False or NaN keep the prediction."""
-        z, ok = _check_z_mask(z, mask, state.x.shape[0])
+        z, ok = check_z_mask(z, mask, state.x.shape[0])
         x, P = fast.kf_select_update(np.ascontiguousarray(state.x.T),
                                      np.ascontiguousarray(state.P.T),
                                      np.ascontiguousarray(z.T), self.model.R, ok)
@@ -446,7 +408,7 @@ class RLSPredictor:
         The RLS filters start from ``ŵ₀ = 0``, ``P₀ = c I`` and take ``xy`` as their first
         observation (eqs. (12)–(15) with ỹ₁ the history).
         """
-        xy = _check_xy("xy", xy)
+        xy = check_xy("xy", xy)
         if not np.all(np.isfinite(xy)):
             raise ValueError("xy holds NaN or infinite values")
         K, M = xy.shape[0], self.M
@@ -501,7 +463,7 @@ class RLSPredictor:
         error of the reported prediction.
         """
         N = state.w.shape[0]
-        z, ok = _check_z_mask(z, mask, N)
+        z, ok = check_z_mask(z, mask, N)
         fill = _axes_flat(state.xy)
         w, p, taps, _ = fast.rls_step(
             _to_comp(state.w), _to_comp(state.P), _to_comp(state.taps), _axes_flat(z),

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.tracking.config import FrameParams
+from mvtrack.tracking.table import AGE, HITS, MISSES, STATE, TID  # columns of TrackTable.ints
 from mvtrack.types import TrackState
 
 IntArray = NDArray[np.int64]
@@ -34,8 +35,6 @@ COASTING = int(TrackState.COASTING)
 STOPPED = int(TrackState.STOPPED)
 
 
-# integer columns of the tracker's table (mvtrack.tracking.tracker.TrackTable.ints)
-UID, TID, STATE, HITS, MISSES, AGE, LAST_K, PREV_K = range(8)
 #: what one frame adds to every row: misses and age + 1
 _COUNTER_STEP = np.zeros(8, dtype=np.int64)
 _COUNTER_STEP[[MISSES, AGE]] = 1

@@ -1,4 +1,4 @@
-"""The tracker's fast association path: gating and global assignment for point distances.
+"""Gating and optimal assignment for disc-shaped gates: the tracker's default association.
 
 For the distances whose gate is a disc around the prediction — ``euclidean`` (eq. (8) of
 paper 2) and ``mahalanobis`` with an isotropic innovation covariance ``S = s I`` (what the
@@ -12,9 +12,9 @@ tracker's box-size scaling adds per-axis factors (an axis-aligned ellipse) that
 :mod:`mvtrack.association` does not have; that case is checked against a hand computation.
 
 Gating is dense (an ``N × M`` matrix by broadcasting) for small problems, from a vertical band
-around each track (detections sorted by x, binary search) for medium ones and spatial (a
-uniform grid of cells one gate radius wide, built by sorting) for large ones, so the number of
-candidate pairs and the cost grow near-linearly with ``N``.
+around each track (:func:`mvtrack.association.gating.band_pairs`) for medium ones and spatial
+(the grid of :func:`mvtrack.association.gating.spatial_pairs`) for large ones, so the number
+of candidate pairs and the cost grow near-linearly with ``N``.
 
 The ``optimal`` rule minimises the total cost of the matched gated pairs plus a penalty
 ``u/2`` for every track and every detection left unmatched — the rule of
@@ -25,8 +25,8 @@ that cost more than they gain are refused. It is solved in tiers:
 1. *stars* — components of the gate graph with one track or one detection (isolated pairs
    included; most pairs in sparse scenes): the cheapest pair, vectorised;
 2. the remaining *conflict* pairs: one dense ``linear_sum_assignment`` on their compact matrix
-   when it is small, else one sparse LAPJVsp solve
-   (:func:`scipy.sparse.csgraph.min_weight_full_bipartite_matching`) of all of them.
+   when it is small, else one sparse LAPJVsp solve of all of them
+   (:func:`mvtrack.association.assign.solve_sparse`, the solver of ``assign``).
 """
 
 from __future__ import annotations
@@ -36,9 +36,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
-from scipy.sparse import csr_array
-from scipy.sparse.csgraph import min_weight_full_bipartite_matching
-from scipy.spatial import cKDTree
+
+from mvtrack.association.assign import first_per_group, solve_sparse
+from mvtrack.association.gating import band_pairs, spatial_pairs
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -60,8 +60,17 @@ _EMPTY = np.zeros(0, dtype=np.intp)
 #: by more than the factor ``ρ`` are not gated)
 SizeTerm = tuple[FloatArray, FloatArray, float] | tuple[FloatArray, FloatArray, float, float]
 
-#: the 3 × 3 block of grid cells around a cell
-_NEIGHBOURS = np.array([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=np.int64)
+
+
+def size_term(
+    twh: FloatArray, dwh: FloatArray, weight: float, size_gate: float | None
+) -> SizeTerm | None:
+    """The box-size term of a Euclidean stage for tracks of box sizes ``twh`` against
+    detections of sizes ``dwh``: ``weight`` (``TrackerConfig.size_weight``) and the size gate
+    ``size_gate`` (``TrackerConfig.size_gate``), or ``None`` when there is neither."""
+    if size_gate is not None:
+        return (twh, dwh, weight, size_gate)
+    return (twh, dwh, weight) if weight else None
 
 
 def _cost(dx: FloatArray, dy: FloatArray, scale: FloatArray | None) -> FloatArray:
@@ -184,78 +193,6 @@ def _pair_size(
     return _add_size(cost, s, weight, gate)
 
 
-def band_pairs(txy: FloatArray, dxy: FloatArray, rx: FloatArray) -> tuple[IntArray, IntArray]:
-    """Candidate pairs: every detection with ``|x_j − x_i| <= rx_i`` (a vertical band around
-    track ``i``), found by binary search in the detections sorted by x. The caller filters the
-    pairs by their exact distance; for a few hundred targets this is cheaper than the dense
-    ``N × M`` matrix and than the grid of :func:`spatial_pairs`.
-    """
-    order = np.argsort(dxy[:, 0], kind="stable")
-    xs = dxy[:, 0].take(order)
-    tx = txy[:, 0]
-    start = np.searchsorted(xs, tx - rx, side="left")
-    count = np.searchsorted(xs, tx + rx, side="right") - start
-    np.maximum(count, 0, out=count)  # a NaN radius or position finds nothing
-    total = int(count.sum())
-    ti = np.repeat(np.arange(txy.shape[0]), count)
-    # positions start[i], start[i] + 1, ... for every track i
-    run_start = np.repeat(start - (np.cumsum(count) - count), count)
-    return ti, order[run_start + np.arange(total)]
-
-
-def spatial_pairs(
-    txy: FloatArray, dxy: FloatArray, radius: FloatArray
-) -> tuple[IntArray, IntArray]:
-    """Candidate pairs: every detection within ``radius_i`` of track ``i`` (and a few more).
-
-    Detections are sorted into square cells of side ``c`` (the largest radius up to 1.25
-    times the median); each track with ``radius_i <= c`` looks at the 3 × 3 cells around its
-    own, found by binary search in the sorted cell keys, so the work is proportional to the
-    number of tracks and candidate pairs. The few tracks with a wider gate (long coasting)
-    are queried in a KD-tree. The caller filters the pairs by their exact distance.
-    """
-    finite = np.isfinite(radius)
-    ref = 1.25 * float(np.median(radius[finite])) if finite.any() else 1.0
-    cell = max(float(radius[radius <= ref].max(initial=0.0)), 1e-6)
-    lo = np.minimum(txy.min(axis=0), dxy.min(axis=0))
-    dc = ((dxy - lo) // cell).astype(np.int64)
-    width = int(max(dc[:, 0].max(), ((txy[:, 0] - lo[0]) // cell).max())) + 3
-    dkey = (dc[:, 1] + 1) * width + dc[:, 0] + 1
-    order = np.argsort(dkey, kind="stable")
-    narrow = (radius <= cell).nonzero()[0]
-    tc = ((txy[narrow] - lo) // cell).astype(np.int64) + 1
-    keys = ((tc[:, 1, None] + _NEIGHBOURS[:, 1]) * width + tc[:, 0, None] + _NEIGHBOURS[:, 0])
-    keys = keys.ravel()
-    n_cells = int(max(dkey.max(), keys.max())) + 2
-    if n_cells <= 8 * (keys.size + dkey.size) + 4096:  # a table of cell starts
-        first = np.zeros(n_cells + 1, dtype=np.int64)
-        np.cumsum(np.bincount(dkey, minlength=n_cells), out=first[1:])
-        keys = np.maximum(keys, 0)
-        start = first[keys]
-        count = first[keys + 1] - start
-    else:  # sparse extent (an outlier far away): binary search in the sorted keys
-        skey = dkey[order]
-        start = np.searchsorted(skey, keys, side="left")
-        count = np.searchsorted(skey, keys, side="right") - start
-    total = int(count.sum())
-    ti = np.repeat(np.repeat(narrow, 9), count)
-    # positions start[r], start[r] + 1, ... for every (track, cell) run r
-    run_start = np.repeat(start - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
-    dj = order[run_start + np.arange(total)]
-    wide = (~(radius <= cell)).nonzero()[0]
-    if wide.size:
-        tree = cKDTree(dxy)
-        r = np.where(np.isfinite(radius[wide]), radius[wide], np.inf)
-        balls = tree.query_ball_point(txy[wide], np.minimum(r, 1e12))
-        counts = np.fromiter((len(b) for b in balls), dtype=np.intp, count=wide.size)
-        ti = np.concatenate([ti, np.repeat(wide, counts)])
-        dj = np.concatenate(
-            [dj, np.fromiter((j for b in balls for j in b), dtype=np.intp,
-                             count=int(counts.sum()))]
-        )
-    return ti.astype(np.intp), dj.astype(np.intp)
-
-
 def dense_optimal(
     txy: FloatArray, dxy: FloatArray, scale: FloatArray | None, gate: float,
     size: SizeTerm | None = None,
@@ -359,17 +296,10 @@ def dense_two_stage(
     return np.concatenate([rows, r2]), np.concatenate([cols, c2]), free_d.nonzero()[0]
 
 
-def _first_of_runs(key: IntArray) -> NDArray[np.bool_]:
-    first = np.empty(key.shape[0], dtype=bool)
-    first[:1] = True
-    np.not_equal(key[1:], key[:-1], out=first[1:])
-    return first
-
-
 def _min_per(key: IntArray, cost: FloatArray, other: IntArray, sel: IntArray) -> IntArray:
     """Among pairs ``sel``, the cheapest per value of ``key`` (ties: lowest ``other``)."""
     order = sel[np.lexsort((other[sel], cost[sel], key[sel]))]
-    return order[_first_of_runs(key[order])]
+    return order[first_per_group(key[order])]
 
 
 def optimal(
@@ -428,21 +358,4 @@ def _solve_conflicts(
         rows, cols = linear_sum_assignment(a)
         got = pos[rows, cols]
         return got[got >= 0]
-    # one sparse solve: rows = tracks, then one dummy per detection; columns = detections,
-    # then one dummy per track. Track → its dummy and dummy → detection cost u/2 (unmatched);
-    # dummies pair freely (0) on the transposed pattern so a perfect matching always exists.
-    # A constant offset keeps every weight positive (it adds the same to every matching).
-    off = 1.0
-    at, ad = np.arange(nt), np.arange(nd)
-    rows = np.concatenate([lt, at, nt + ad, nt + ld])
-    cols = np.concatenate([ld, nd + at, ad, nd + lt])
-    w = np.concatenate(
-        [c + off, np.full(nt, half_u + off), np.full(nd, half_u + off), np.full(p, off)]
-    )
-    g = csr_array((w, (rows, cols)), shape=(nt + nd, nd + nt))
-    r, k = min_weight_full_bipartite_matching(g)
-    real = (r < nt) & (k < nd)
-    key = lt.astype(np.int64) * nd + ld
-    order = np.argsort(key)
-    hit = np.searchsorted(key[order], r[real].astype(np.int64) * nd + k[real])
-    return order[hit]
+    return solve_sparse(t, d, c, half_u, (nt, lt, nd, ld)).nonzero()[0]  # the same, sparse

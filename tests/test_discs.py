@@ -1,10 +1,7 @@
-"""The tracker's fast paths equal the general code they replace.
-
-- :class:`FastCVPredictor` (closed-form per-axis CV Kalman) against ``kalman-cv`` of
-  :mod:`mvtrack.filters.predictors` (batched matrix Kalman filter, Joseph form).
-- :mod:`mvtrack.tracking.associate` against :mod:`mvtrack.association` (gating values and the
-  penalised optimal assignment), and against brute force on tiny problems.
-"""
+"""The disc-gate association (:mod:`mvtrack.association.discs`) equals the general code of
+:mod:`mvtrack.association` (gating values and the penalised optimal assignment), brute force
+on tiny problems, and hand computations for what only it has (per-axis factors, size term and
+size gate, the two dense stages)."""
 
 from __future__ import annotations
 
@@ -14,42 +11,7 @@ import numpy as np
 import pytest
 
 from mvtrack.association import TrackView, assign, candidate_pairs
-from mvtrack.filters.predictors import make_predictor
-from mvtrack.tracking import associate as fa
-from mvtrack.tracking.fastkf import FastCVPredictor
-
-
-@pytest.mark.parametrize("params", [{}, {"q": 0.3, "r": 4.0, "vel_var": 9.0}])
-def test_fast_cv_equals_the_general_kalman_cv_over_a_random_run(params: dict) -> None:
-    rng = np.random.default_rng(5)
-    fast = FastCVPredictor(**params)
-    ref = make_predictor("kalman-cv", **params)
-    xy0 = rng.uniform(0, 500, (6, 2))
-    a, b = fast.init(xy0), ref.init(xy0)
-    for k in range(40):
-        a, b = fast.predict(a), ref.predict(b)
-        np.testing.assert_allclose(fast.position(a), ref.position(b), rtol=1e-10, atol=1e-9)
-        np.testing.assert_allclose(fast.innovation_cov(a), ref.innovation_cov(b), rtol=1e-10)
-        np.testing.assert_allclose(fast.position_cov(a), ref.position_cov(b), rtol=1e-10)
-        z = xy0 + k * 2.0 + rng.normal(0, 2.0, xy0.shape)
-        mask = rng.random(6) > 0.3
-        z[~mask & (rng.random(6) > 0.5)] = np.nan  # some missing rows say so with NaN
-        a, b = fast.update(a, z, mask), ref.update(b, z, mask)
-        np.testing.assert_allclose(fast.position(a), ref.position(b), rtol=1e-10, atol=1e-9)
-        np.testing.assert_allclose(fast.velocity(a), ref.velocity(b), rtol=1e-9, atol=1e-9)
-        np.testing.assert_allclose(
-            fast.position_cov(a), ref.position_cov(b), rtol=1e-9, atol=1e-12
-        )
-
-
-def test_fast_cv_rows_without_measurement_keep_the_prediction() -> None:
-    f = FastCVPredictor(q=0.5, r=2.0)
-    s = f.predict(f.init(np.array([[0.0, 0.0], [10.0, 10.0]])))
-    z = np.array([[1.0, 1.0], [np.nan, np.nan]])
-    u = f.update(s, z, np.array([True, True]))
-    np.testing.assert_array_equal(u.x[1], s.x[1])
-    np.testing.assert_array_equal(u.P[1], s.P[1])
-    assert not np.array_equal(u.x[0], s.x[0])
+from mvtrack.association import discs as fa
 
 
 def _scene(rng, n, m, spread):
@@ -174,29 +136,6 @@ def test_gate_pairs_with_per_axis_factors_equal_a_hand_computed_ellipse(n, m, sp
     np.testing.assert_allclose([got[k] for k in zip(wt, wd, strict=True)], want[wt, wd])
 
 
-def test_fast_cv_with_per_track_r_equals_kalman_cv_with_each_r() -> None:
-    rng = np.random.default_rng(3)
-    fast = FastCVPredictor(q=0.2, r=4.0, vel_var=9.0)
-    r = np.array([4.0, 36.0, 100.0])
-    refs = [make_predictor("kalman-cv", q=0.2, r=float(v), vel_var=9.0) for v in r]
-    xy0 = rng.uniform(0, 300, (3, 2))
-    a = fast.init(xy0, r)
-    b = [p.init(xy0[i : i + 1]) for i, p in enumerate(refs)]
-    for k in range(25):
-        a = fast.predict(a)
-        b = [p.predict(s) for p, s in zip(refs, b, strict=True)]
-        z = xy0 + 3.0 * k + rng.normal(0, 3.0, xy0.shape)
-        mask = rng.random(3) > 0.2
-        a = fast.update(a, z, mask, r)
-        b = [p.update(s, z[i : i + 1], mask[i : i + 1]) for i, (p, s) in
-             enumerate(zip(refs, b, strict=True))]
-        for i, (p, s) in enumerate(zip(refs, b, strict=True)):
-            np.testing.assert_allclose(fast.position(a)[i], p.position(s)[0], rtol=1e-10)
-            np.testing.assert_allclose(fast.velocity(a)[i], p.velocity(s)[0], atol=1e-9)
-            np.testing.assert_allclose(fast.position_cov(a)[i], p.position_cov(s)[0],
-                                       rtol=1e-9)
-
-
 @pytest.mark.parametrize("n, m", [(6, 7), (100, 97), (900, 880)])
 def test_gate_pairs_size_term_is_the_capped_weighted_size_difference(n, m) -> None:
     rng = np.random.default_rng(n)
@@ -212,145 +151,6 @@ def test_gate_pairs_size_term_is_the_capped_weighted_size_difference(n, m) -> No
     s = d[:, 0] ** 2 / f2[ti, 0] + d[:, 1] ** 2 / f2[ti, 1]
     np.testing.assert_allclose(sized, plain + 0.3 * np.minimum(s, 100.0))
     assert (sized < 200.0).all()  # below leaving both unmatched (u = 2 gate)
-
-
-def _cluttered_frames(n: int, frames: int, seed: int) -> list:
-    """Targets moving at constant velocity with missed detections and false alarms (rows
-    shuffled): every frame has births, and most have deletions."""
-    from mvtrack.types import Detections
-
-    rng = np.random.default_rng(seed)
-    p = rng.uniform(0, 400, (n, 2))
-    v = rng.uniform(-3, 3, (n, 2))
-    wh = rng.uniform(20, 40, (n, 2))
-    out = []
-    for k in range(frames):
-        seen = rng.random(n) > 0.15
-        xy = np.vstack([p[seen] + rng.normal(0, 1.0, (int(seen.sum()), 2)),
-                        rng.uniform(0, 400, (3, 2))])
-        bwh = np.vstack([wh[seen], rng.uniform(20, 40, (3, 2))])
-        perm = rng.permutation(xy.shape[0])
-        out.append(Detections(k, xy[perm], bwh[perm]))
-        p = p + v
-    return out
-
-
-def _run(frames: list, config=None) -> tuple[list, list]:
-    from mvtrack.tracking import Tracker
-
-    tracker = Tracker(config)
-    outs = [tracker.step(d) for d in frames]
-    return outs, [tracker.row_uids.copy(), tracker.tracks, tracker.pstate]
-
-
-def _assert_same_frames(a: list, b: list) -> None:
-    for fa_, fb in zip(a, b, strict=True):
-        for name in ("track_id", "state", "det_index", "measured_xy", "filtered_xy",
-                     "predicted_xy", "wh", "velocity"):
-            np.testing.assert_array_equal(getattr(fa_, name), getattr(fb, name))
-
-
-@pytest.mark.parametrize("predictor", ["kalman-cv", "kalman-ca"])
-def test_deleting_only_the_last_rows_by_slicing_equals_gathering_the_kept_rows(
-    predictor: str, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    from mvtrack.tracking import TrackerConfig
-    from mvtrack.tracking import tracker as tr
-
-    frames = _cluttered_frames(8, 60, 3)
-    config = TrackerConfig(predictor=predictor)
-    fast, fast_end = _run(frames, config)
-    kept_rows = tr._kept_rows
-    sliced = []
-
-    def as_indices(delete):  # the general path: the kept rows as indices, always
-        keep = kept_rows(delete)
-        if isinstance(keep, slice):
-            sliced.append(keep)
-        return (~delete).nonzero()[0]
-
-    monkeypatch.setattr(tr, "_kept_rows", as_indices)
-    general, general_end = _run(frames, config)
-    assert sliced, "the scene should delete only trailing rows in some frames"
-    _assert_same_frames(fast, general)
-    np.testing.assert_array_equal(fast_end[0], general_end[0])
-    np.testing.assert_array_equal(fast_end[1].ints, general_end[1].ints)
-    np.testing.assert_array_equal(fast_end[1].floats, general_end[1].floats)
-
-
-def test_kept_rows_are_a_slice_only_when_the_last_rows_end() -> None:
-    from mvtrack.tracking import tracker as tr
-
-    rng = np.random.default_rng(4)
-    masks = [rng.random(rng.integers(1, 9)) > rng.uniform(0.2, 0.9) for _ in range(300)]
-    masks += [np.array([False, False, True, True]), np.array([True] * 3)]
-    slices = 0
-    for delete in masks:
-        keep = tr._kept_rows(delete)
-        rows = np.arange(delete.size)
-        np.testing.assert_array_equal(rows[keep], (~delete).nonzero()[0])
-        slices += isinstance(keep, slice)
-    assert 0 < slices < len(masks)
-
-
-def test_table_and_state_slices_equal_the_gathered_rows() -> None:
-    from mvtrack.tracking import tracker as tr
-    from mvtrack.types import n_rows
-
-    rng = np.random.default_rng(0)
-    tab = tr.TrackTable(rng.integers(0, 9, (7, tr.N_INT)), rng.normal(size=(7, tr.N_FLOAT)))
-    for stop in (0, 3, 7):
-        a, b = tab.take(slice(0, stop)), tab.take(np.arange(stop))
-        np.testing.assert_array_equal(a.ints, b.ints)
-        np.testing.assert_array_equal(a.floats, b.floats)
-    fast = FastCVPredictor().init(rng.normal(size=(7, 2)))
-    general = make_predictor("kalman-ca").init(rng.normal(size=(7, 2)))
-    for state in (fast, general):
-        a, b = tr._take_state(state, slice(0, 4)), tr._take_state(state, np.arange(4))
-        assert type(a) is type(state)
-        for name in ("x", "P"):
-            if hasattr(state, name):
-                np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
-        assert n_rows(a) == 4
-
-
-def test_counters_with_a_mask_equal_counters_with_row_indices() -> None:
-    from mvtrack.tracking.lifecycle import count_hits
-
-    rng = np.random.default_rng(1)
-    ints = rng.integers(0, 20, (9, 8))
-    matched = rng.random(9) > 0.5
-    held = matched | (rng.random(9) > 0.7)
-    a, b = ints.copy(), ints.copy()
-    count_hits(a, matched, held)
-    count_hits(b, matched, held.nonzero()[0])
-    np.testing.assert_array_equal(a, b)
-
-
-def test_detection_rows_pad_with_nan_for_tracks_without_a_detection() -> None:
-    from mvtrack.tracking import tracker as tr
-    from mvtrack.types import Detections
-
-    dets = Detections(0, [[1.0, 2.0], [3.0, 4.0]], [[5.0, 6.0], [7.0, 8.0]])
-    rows = tr._detection_rows(dets).take(np.array([1, -1, 0]), 0)
-    np.testing.assert_array_equal(rows[0], [3.0, 4.0, 7.0, 8.0])
-    assert np.isnan(rows[1]).all()
-    np.testing.assert_array_equal(rows[2], [1.0, 2.0, 5.0, 6.0])
-    assert tr._detection_rows(Detections.empty(0)).shape == (1, 4)
-
-
-def test_many_births_in_one_frame_get_consecutive_uids() -> None:
-    from mvtrack.tracking import Tracker
-    from mvtrack.types import Detections
-
-    rng = np.random.default_rng(2)
-    tracker = Tracker()
-    tracker.step(Detections(0, rng.uniform(0, 1000, (40, 2)), np.full((40, 2), 10.0)))
-    np.testing.assert_array_equal(np.sort(tracker.tracks.uid), np.arange(40))
-    tracker.step(Detections(1, rng.uniform(2000, 3000, (50, 2)), np.full((50, 2), 10.0)))
-    np.testing.assert_array_equal(np.sort(tracker.tracks.uid), np.arange(40, 90))
-    assert (tracker.tracks.last_k == 1).all() and (tracker.tracks.prev_k == 1).all()
-    assert (tracker.tracks.hits == 1).all() and (tracker.tracks.track_id == -1).all()
 
 
 @pytest.mark.parametrize("n, m", [(6, 7), (100, 97), (900, 880)])  # dense, band, grid gating

@@ -1,22 +1,24 @@
-"""Closed-form per-axis constant-velocity Kalman filter for the tracker's hot path.
+"""``kalman-cv``: the per-axis constant-velocity Kalman filter, in closed form.
 
-The same filter as ``kalman-cv`` of :mod:`mvtrack.filters.predictors` (per-axis model
-:func:`mvtrack.filters.models.constant_velocity`, ``H = [1, 0]``), written out in scalars:
-both image axes use the same model, the same initial covariance and the same update mask, so
-their 2×2 covariances are identical (SPEC E2.3) and one ``(a, b, c)`` triple per track serves
-both. A frame then costs a couple of dozen array operations on ``(N,)`` columns instead of
-batched matrix products, which is what keeps the tracker's small-``N`` cost low. It mirrors
-:class:`mvtrack.filters.predictors.KalmanCVPredictor` (``make_predictor("kalman-cv")``,
-whose kernels are :func:`mvtrack.filters.fast.kf_axis_predict` and
-:func:`~mvtrack.filters.fast.kf_axis_update`);
-``tests/test_tracker_fastpath.py`` pins the two equal to 1e-9, also with a measurement
-variance per track (the tracker's box-size scaling, ``TrackerConfig.size_ref``).
+The per-axis model :func:`mvtrack.filters.models.constant_velocity` (``H = [1, 0]``) written
+out in scalars: both image axes use the same model, the same initial covariance and the same
+update mask, so their 2×2 covariances are identical (SPEC E2.3) and one ``(a, b, c)`` triple
+per track serves both. A frame then costs a couple of dozen array operations on ``(N,)``
+columns instead of batched matrix products, which is what keeps the tracker's small-``N``
+cost low. ``make_predictor("kalman-cv")`` and the tracker use this one implementation; the
+general per-axis filter (:class:`mvtrack.filters.predictors.PerAxisKalmanPredictor` on the
+same model, kernels :func:`mvtrack.filters.fast.kf_axis_predict` and
+:func:`~mvtrack.filters.fast.kf_axis_update`) is its oracle: ``tests/test_tracker_fastpath.py``
+pins the two equal to 1e-9, also with a measurement variance per track (the tracker's
+box-size scaling, ``TrackerConfig.size_ref``).
 
-With ``P = [[a, b], [b, c]]`` per axis, Δt = 1 frame, ``G = [1/2, 1]ᵀ`` and ``Q = G q Gᵀ``:
+With ``P = [[a, b], [b, c]]`` per axis, frame interval Δt (1 frame in the tracker),
+``G = [Δt²/2, Δt]ᵀ`` and ``Q = G q Gᵀ``:
 
 .. math::
-    \\bar p = p + v,\\quad \\bar a = a + 2b + c + q/4,\\quad \\bar b = b + c + q/2,
-    \\quad \\bar c = c + q \\qquad \\text{(eqs. (6)–(7) of paper 1)}
+    \\bar p = p + v Δt,\\quad \\bar a = a + 2 Δt b + Δt^2 c + q Δt^4/4,\\quad
+    \\bar b = b + Δt c + q Δt^3/2,\\quad \\bar c = c + q Δt^2
+    \\qquad \\text{(eqs. (6)–(7) of paper 1)}
 
     S = \\bar a + r,\\; K = [\\bar a, \\bar b]^T / S \\;(3),\\quad
     \\hat x = \\bar x + K (z - \\bar p) \\;(4),\\quad
@@ -29,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mvtrack.filters.base import BoolArray, FloatArray
+from mvtrack.filters.base import BoolArray, FloatArray, check_shapes, check_xy
 from mvtrack.filters.models import check_positive
 
 #: the columns of ``(a, b, c)`` that multiply the innovation of ``(px, py, vx, vy)`` in the gain
@@ -52,7 +54,7 @@ class CVState:
     P: FloatArray
 
 
-class FastCVPredictor:
+class KalmanCVPredictor:
     """``kalman-cv`` in closed form (implements :class:`mvtrack.filters.base.Predictor`).
 
     Parameters
@@ -64,21 +66,27 @@ class FastCVPredictor:
     vel_var : float
         Initial velocity variance (px²/frame²); a new track starts at its first measurement
         with zero velocity and ``P₀ = diag(r, vel_var)`` per axis.
+    dt : float
+        Frame interval (1 frame).
     """
 
     name = "kalman-cv"
 
-    def __init__(self, q: float = 0.1, r: float = 1.0, vel_var: float = 25.0) -> None:
+    def __init__(
+        self, q: float = 0.1, r: float = 1.0, vel_var: float = 25.0, dt: float = 1.0
+    ) -> None:
         self.q = check_positive("q", q)
         self.r = check_positive("r", r)
         self.vel_var = check_positive("vel_var", vel_var)
+        dt = check_positive("dt", dt)
         self._Ft = np.array(  # x ↦ F x for x = [px, py, vx, vy], as a right multiplication
-            [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 1.0, 0.0],
-             [0.0, 1.0, 0.0, 1.0]]
+            [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [dt, 0.0, 1.0, 0.0],
+             [0.0, dt, 0.0, 1.0]]
         )
-        # (a, b, c) ↦ F P Fᵀ: a + 2b + c, b + c, c (Δt = 1)
-        self._FPF = np.array([[1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [1.0, 1.0, 1.0]])
-        self._qvec = self.q * np.array([0.25, 0.5, 1.0])  # G q Gᵀ, G = [1/2, 1]ᵀ
+        # (a, b, c) ↦ F P Fᵀ: a + 2Δt b + Δt² c, b + Δt c, c
+        self._FPF = np.array([[1.0, 0.0, 0.0], [2.0 * dt, 1.0, 0.0], [dt * dt, dt, 1.0]])
+        # G q Gᵀ as (a, b, c), G = [Δt²/2, Δt]ᵀ
+        self._qvec = self.q * np.array([0.25 * dt**4, 0.5 * dt**3, dt * dt])
         self._P0 = np.array([self.r, 0.0, self.vel_var])  # diag(r, vel_var) as (a, b, c)
 
     def init(self, xy: FloatArray, r: FloatArray | None = None) -> CVState:
@@ -87,6 +95,7 @@ class FastCVPredictor:
         ``r`` (K,), optional: per-track measurement variances instead of ``self.r``
         (``P₀ = diag(r_i, vel_var)``).
         """
+        xy = check_xy("xy", xy)
         k = xy.shape[0]
         x = np.zeros((k, 4))
         x[:, :2] = xy
@@ -110,8 +119,10 @@ class FastCVPredictor:
         ``r`` (N,), optional: per-track measurement variances instead of ``self.r``.
         """
         x, P = state.x, state.P
+        z, mask = check_shapes(z, mask, x.shape[0])
         nu = z - x[:, :2]  # innovation per axis (NaN where missing)
-        ok = mask & (nu[:, 0] == nu[:, 0])  # and not NaN
+        both = nu[:, 0] + nu[:, 1]
+        ok = mask & (both == both)  # and neither coordinate NaN
         w = ok / (P[:, 0] + (self.r if r is None else r))  # 1/S, eq. (3); 0 where no measurement
         gain = P.take(_GAIN_COLS, 1) * w[:, None]  # K = [a, b]ᵀ / S, eq. (3), as (a, a, b, b)/S
         np.copyto(nu, 0.0, where=~ok[:, None])
@@ -119,6 +130,12 @@ class FastCVPredictor:
         Pn = P * (1.0 - gain[:, 0])[:, None]  # eq. (5): a r/S, b r/S, c − b²/S
         Pn[:, 2] = P[:, 2] - P[:, 1] * gain[:, 2]
         return CVState(xn, Pn)
+
+    def covariance(self, state: CVState) -> FloatArray:
+        """Full per-axis covariances (N, 2, 2, 2): ``[[a, b], [b, c]]`` for x and for y."""
+        a, b, c = state.P[:, 0], state.P[:, 1], state.P[:, 2]
+        full = np.stack([np.stack([a, b], -1), np.stack([b, c], -1)], -2)  # (N, 2, 2)
+        return np.repeat(full[:, None], 2, axis=1)
 
     def position(self, state: CVState) -> FloatArray:
         """Position (N, 2)."""
