@@ -21,3 +21,13 @@ def box_video(path: Path, n: int = 30, speed: int = 2) -> Path:
         writer.write(img)
     writer.release()
     return path
+
+
+def default_signals() -> None:
+    """``preexec_fn`` of a child that a test signals: SIGINT and SIGTERM at their defaults in
+    the child, whatever the test process has set meanwhile (an ignored signal stays ignored
+    across ``exec``, and Python then never turns SIGINT into ``KeyboardInterrupt``)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)

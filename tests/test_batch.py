@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from _media import box_video
+from _media import box_video, default_signals
 from mvtrack.cli import main
 from mvtrack.cli.batch import expand_videos
 from mvtrack.config import RunSettings
@@ -165,7 +165,8 @@ def test_ctrl_c_in_a_terminal_stops_workers_and_exits_130(videos, tmp_path) -> N
     proc = subprocess.Popen(
         [sys.executable, "-m", "mvtrack", "batch", str(folder), "--out", str(out),
          "--workers", "2"],
-        start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        start_new_session=True, preexec_fn=default_signals,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     try:
         deadline = time.monotonic() + 120

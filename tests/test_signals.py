@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 import pytest
 
+from _media import default_signals
 from mvtrack.cli import main
 
 
@@ -132,6 +133,7 @@ def test_real_sigterm_to_track_keeps_results(vtest_path, tmp_path) -> None:
     out = tmp_path / "vtest"
     proc = subprocess.Popen(
         [sys.executable, "-m", "mvtrack", "track", str(vtest_path), "--out", str(out)],
+        preexec_fn=default_signals,
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     deadline = time.monotonic() + 60
@@ -172,7 +174,8 @@ def _batch_signalled(tmp_path: Path, sig: int) -> tuple[subprocess.Popen[str], s
     proc = subprocess.Popen(
         [sys.executable, "-m", "mvtrack", "batch", str(folder), "--out", str(out),
          "--workers", "2"],
-        start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        start_new_session=True, preexec_fn=default_signals,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     try:
         deadline = time.monotonic() + 120

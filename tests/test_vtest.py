@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _media import default_signals
 from mvtrack.cli import main
 
 W, H = 768, 576
@@ -82,6 +83,7 @@ def test_real_ctrl_c_stops_cleanly(vtest_path, tmp_path) -> None:
     out = tmp_path / "vtest"
     proc = subprocess.Popen(
         [sys.executable, "-m", "mvtrack", "track", str(vtest_path), "--out", str(out)],
+        preexec_fn=default_signals,
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     deadline = time.monotonic() + 60
