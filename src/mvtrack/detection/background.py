@@ -167,7 +167,46 @@ class FrameDifference(FrontEnd):
         return self._fg
 
 
-class MOG2(FrontEnd):
+class _Subtractor(FrontEnd):
+    """An OpenCV background subtractor (MOG2, KNN) as a front end: shadow pixels (marked 127
+    by OpenCV when ``detect_shadows``) count as background; only confident foreground (255)
+    goes to the blob stage. Subclasses build the model (:meth:`_create`)."""
+
+    def __init__(
+        self, history: int, threshold: tuple[str, float], detect_shadows: bool,
+        learning_rate: float, use_color: bool, warmup: int, blob: dict[str, Any],
+    ) -> None:
+        name, value = threshold
+        if history < 1:
+            raise ValueError(f"history must be ≥ 1 frame, got {history}")
+        if not value > 0:
+            raise ValueError(f"{name} must be positive, got {value}")
+        super().__init__(BlobExtractor(**blob), warmup)
+        self.history = int(history)
+        setattr(self, name, float(value))
+        self.detect_shadows = bool(detect_shadows)
+        self.learning_rate = float(learning_rate)
+        self.use_color = bool(use_color)
+        self._reset_model()
+
+    def _create(self) -> Any:
+        raise NotImplementedError
+
+    def _reset_model(self) -> None:
+        self._model = self._create()
+        self._fg: NDArray[np.uint8] | None = None
+
+    def foreground(self, frame: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        """The subtractor's mask with shadows (127) removed: 255 where foreground."""
+        img = frame if self.use_color else luminance(frame)
+        raw = self._model.apply(img, learningRate=self.learning_rate)
+        if self._fg is None or self._fg.shape != raw.shape:
+            self._fg = np.empty_like(raw)
+        cv2.compare(raw, 127, cv2.CMP_GT, dst=self._fg)
+        return self._fg
+
+
+class MOG2(_Subtractor):
     """OpenCV's Gaussian-mixture background subtractor (``cv2.createBackgroundSubtractorMOG2``).
 
     Shadow pixels (marked 127 by OpenCV when ``detect_shadows``) are treated as background;
@@ -202,37 +241,17 @@ class MOG2(FrontEnd):
         warmup: int = 0,
         **blob: Any,
     ) -> None:
-        if history < 1:
-            raise ValueError(f"history must be ≥ 1 frame, got {history}")
-        if not var_threshold > 0:
-            raise ValueError(f"var_threshold must be positive, got {var_threshold}")
-        super().__init__(BlobExtractor(**blob), warmup)
-        self.history = int(history)
-        self.var_threshold = float(var_threshold)
-        self.detect_shadows = bool(detect_shadows)
-        self.learning_rate = float(learning_rate)
-        self.use_color = bool(use_color)
-        self._reset_model()
+        super().__init__(history, ("var_threshold", var_threshold), detect_shadows,
+                         learning_rate, use_color, warmup, blob)
 
-    def _reset_model(self) -> None:
-        self._model = cv2.createBackgroundSubtractorMOG2(
-            history=self.history,
-            varThreshold=self.var_threshold,
+    def _create(self) -> Any:
+        return cv2.createBackgroundSubtractorMOG2(
+            history=self.history, varThreshold=self.var_threshold,
             detectShadows=self.detect_shadows,
         )
-        self._fg: NDArray[np.uint8] | None = None
-
-    def foreground(self, frame: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """MOG2's mask with shadows (127) removed: 255 where foreground."""
-        img = frame if self.use_color else luminance(frame)
-        raw = self._model.apply(img, learningRate=self.learning_rate)
-        if self._fg is None or self._fg.shape != raw.shape:
-            self._fg = np.empty_like(raw)
-        cv2.compare(raw, 127, cv2.CMP_GT, dst=self._fg)
-        return self._fg
 
 
-class KNN(FrontEnd):
+class KNN(_Subtractor):
     """OpenCV's k-nearest-neighbours background subtractor
     (``cv2.createBackgroundSubtractorKNN``), shadows discarded as in :class:`MOG2`.
 
@@ -266,31 +285,11 @@ class KNN(FrontEnd):
         warmup: int = 0,
         **blob: Any,
     ) -> None:
-        if history < 1:
-            raise ValueError(f"history must be ≥ 1 frame, got {history}")
-        if not dist2_threshold > 0:
-            raise ValueError(f"dist2_threshold must be positive, got {dist2_threshold}")
-        super().__init__(BlobExtractor(**blob), warmup)
-        self.history = int(history)
-        self.dist2_threshold = float(dist2_threshold)
-        self.detect_shadows = bool(detect_shadows)
-        self.learning_rate = float(learning_rate)
-        self.use_color = bool(use_color)
-        self._reset_model()
+        super().__init__(history, ("dist2_threshold", dist2_threshold), detect_shadows,
+                         learning_rate, use_color, warmup, blob)
 
-    def _reset_model(self) -> None:
-        self._model = cv2.createBackgroundSubtractorKNN(
-            history=self.history,
-            dist2Threshold=self.dist2_threshold,
+    def _create(self) -> Any:
+        return cv2.createBackgroundSubtractorKNN(
+            history=self.history, dist2Threshold=self.dist2_threshold,
             detectShadows=self.detect_shadows,
         )
-        self._fg: NDArray[np.uint8] | None = None
-
-    def foreground(self, frame: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """KNN's mask with shadows (127) removed: 255 where foreground."""
-        img = frame if self.use_color else luminance(frame)
-        raw = self._model.apply(img, learningRate=self.learning_rate)
-        if self._fg is None or self._fg.shape != raw.shape:
-            self._fg = np.empty_like(raw)
-        cv2.compare(raw, 127, cv2.CMP_GT, dst=self._fg)
-        return self._fg
