@@ -125,39 +125,6 @@ def test_sigterm_outside_the_frame_loop_is_one_line_and_143(tmp_path, capsys,
     assert status == 143 and err == "error: terminated", (status, err)
 
 
-@pytest.mark.shared
-def test_real_sigterm_to_track_keeps_results(vtest_path, tmp_path) -> None:
-    """SIGTERM from another process to a running ``mvtrack track`` on the real recording:
-    status 143, one line on stderr, the files of the frames tracked so far, valid, and no
-    temporary file left."""
-    out = tmp_path / "vtest"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "mvtrack", "track", str(vtest_path), "--out", str(out)],
-        preexec_fn=default_signals,
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
-    deadline = time.monotonic() + 60
-    while not out.exists() and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.05)  # the folder appears when the frame loop starts
-    time.sleep(1.0)
-    if proc.poll() is not None:
-        pytest.skip("the whole video was tracked before the signal could be sent")
-    proc.send_signal(signal.SIGTERM)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 143, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: terminated after"), err
-    summary = json.loads((out / "summary.json").read_text())
-    assert summary["interrupted"] is True and 0 < summary["frames"] < 795
-    rows = np.loadtxt(out / "results.txt", delimiter=",", ndmin=2)
-    assert rows.shape[1] == 10 and rows[:, 0].max() <= summary["frames"]
-    cap = cv2.VideoCapture(str(out / "tracks.mp4"))
-    # a signal between the frame's count and its drawing leaves it out of the video
-    assert summary["frames"] - 1 <= int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) <= summary["frames"]
-    cap.release()
-    assert not [p for p in out.iterdir() if p.name.startswith(".")]
-
-
 def _batch_signalled(tmp_path: Path, sig: int) -> tuple[subprocess.Popen[str], str, list[Any]]:
     """Start ``mvtrack batch`` on six short videos with two workers, send ``sig`` to the
     client process only once one video is done; (process, stderr, worker processes)."""

@@ -72,13 +72,18 @@ def test_vtest_whole_video(vtest_path, tmp_path) -> None:
     ]
 
 
-def test_real_ctrl_c_stops_cleanly(vtest_path, tmp_path) -> None:
-    """SIGINT (what Ctrl-C sends) to a running ``mvtrack track``: status 130, one line on
-    stderr, and the files of the frames tracked so far, with no temporary file left."""
+@pytest.mark.parametrize("sig, status, word", [("SIGINT", 130, "interrupted"),
+                                               ("SIGTERM", 143, "terminated")])
+def test_real_signal_stops_cleanly(vtest_path, tmp_path, sig, status, word) -> None:
+    """SIGINT (what Ctrl-C sends) or SIGTERM (``timeout``, ``docker stop``) from another
+    process to a running ``mvtrack track``: status 130 or 143, one line on stderr, the files of
+    the frames tracked so far, valid, and no temporary file left."""
     import signal
     import subprocess
     import sys
     import time
+
+    import cv2
 
     out = tmp_path / "vtest"
     proc = subprocess.Popen(
@@ -92,12 +97,18 @@ def test_real_ctrl_c_stops_cleanly(vtest_path, tmp_path) -> None:
     time.sleep(1.0)
     if proc.poll() is not None:
         pytest.skip("the whole video was tracked before the signal could be sent")
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(getattr(signal, sig))
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
+    assert proc.returncode == status, err
     lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: interrupted after"), err
+    assert len(lines) == 1 and lines[0].startswith(f"error: {word} after"), err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["interrupted"] is True and 0 < summary["frames"] < 795
-    assert (out / "tracks.mp4").stat().st_size > 0 and (out / "results.txt").exists()
+    rows = np.loadtxt(out / "results.txt", delimiter=",", ndmin=2)
+    assert rows.shape[1] == 10 and rows[:, 0].max() <= summary["frames"]
+    cap = cv2.VideoCapture(str(out / "tracks.mp4"))
+    # a signal between the frame's count and its drawing leaves it out of the video
+    assert summary["frames"] - 1 <= int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) <= summary["frames"]
+    cap.release()
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]
     assert not [p for p in out.iterdir() if p.name.startswith(".")]
