@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -31,3 +32,53 @@ def default_signals() -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def batch_signalled(tmp_path: Path, sig: int, group: bool = False) -> tuple[Any, str, list[Any]]:
+    """Start ``mvtrack batch`` on six short videos with two workers and send ``sig`` once one
+    video is done: to the client alone (``kill PID``, ``timeout``) or, with ``group``, to its
+    whole process group (a terminal's Ctrl-C). Returns (process, stderr, worker processes
+    seen before the signal)."""
+    import json
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import psutil  # installed with distributed
+
+    from mvtrack.sim.render import write_video
+    from mvtrack.sim.scenes import x4_nine_vehicles
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    full = write_video(x4_nine_vehicles(), folder / "v0.mp4", progress=False)
+    for i in range(1, 6):
+        (folder / f"v{i}.mp4").write_bytes(full.read_bytes())
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mvtrack", "batch", str(folder), "--out", str(out),
+         "--workers", "2"],
+        start_new_session=True, preexec_fn=default_signals,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            time.sleep(0.1)
+            try:
+                if json.loads((out / "batch.json").read_text())["ok"] >= 1:
+                    break
+            except (OSError, ValueError):
+                pass
+        workers = psutil.Process(proc.pid).children(recursive=True)
+        if group:
+            os.killpg(proc.pid, sig)
+        else:
+            proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    return proc, err, workers

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from _media import box_video, default_signals
+from _media import batch_signalled, box_video
 from mvtrack.cli import main
 from mvtrack.cli.batch import expand_videos
 from mvtrack.config import RunSettings
@@ -150,40 +150,13 @@ def test_ctrl_c_in_a_terminal_stops_workers_and_exits_130(videos, tmp_path) -> N
     """SIGINT to the whole process group, as a terminal sends it: only the client handles it
     (no worker tracebacks), the local workers stop, batch.json says what finished."""
     import signal
-    import subprocess
-    import sys
     import time
 
     import psutil  # installed with distributed
 
-    folder = tmp_path / "in"
-    folder.mkdir()
-    full = write_video(x4_nine_vehicles(), folder / "v0.mp4", progress=False)
-    for i in range(1, 6):
-        (folder / f"v{i}.mp4").write_bytes(full.read_bytes())
+    proc, err, workers = batch_signalled(tmp_path, signal.SIGINT, group=True)
     out = tmp_path / "out"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "mvtrack", "batch", str(folder), "--out", str(out),
-         "--workers", "2"],
-        start_new_session=True, preexec_fn=default_signals,
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
-    try:
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:
-            time.sleep(0.1)
-            try:
-                if json.loads((out / "batch.json").read_text())["ok"] >= 1:
-                    break
-            except (OSError, ValueError):
-                pass
-        workers = psutil.Process(proc.pid).children(recursive=True)
-        assert workers, "no worker processes"
-        os.killpg(proc.pid, signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
+    assert workers, "no worker processes"
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert "error: interrupted" in err

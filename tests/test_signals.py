@@ -9,17 +9,14 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
-from typing import Any
 
 import cv2
 import numpy as np
 import pytest
 
-from _media import default_signals
+from _media import batch_signalled
 from mvtrack.cli import main
 
 
@@ -125,49 +122,13 @@ def test_sigterm_outside_the_frame_loop_is_one_line_and_143(tmp_path, capsys,
     assert status == 143 and err == "error: terminated", (status, err)
 
 
-def _batch_signalled(tmp_path: Path, sig: int) -> tuple[subprocess.Popen[str], str, list[Any]]:
-    """Start ``mvtrack batch`` on six short videos with two workers, send ``sig`` to the
-    client process only once one video is done; (process, stderr, worker processes)."""
-    psutil = pytest.importorskip("psutil")  # installed with distributed
-    from mvtrack.sim.render import write_video
-    from mvtrack.sim.scenes import x4_nine_vehicles
-
-    folder = tmp_path / "in"
-    folder.mkdir()
-    full = write_video(x4_nine_vehicles(), folder / "v0.mp4", progress=False)
-    for i in range(1, 6):
-        (folder / f"v{i}.mp4").write_bytes(full.read_bytes())
-    out = tmp_path / "out"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "mvtrack", "batch", str(folder), "--out", str(out),
-         "--workers", "2"],
-        start_new_session=True, preexec_fn=default_signals,
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
-    try:
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:
-            time.sleep(0.1)
-            try:
-                if json.loads((out / "batch.json").read_text())["ok"] >= 1:
-                    break
-            except (OSError, ValueError):
-                pass
-        workers = psutil.Process(proc.pid).children(recursive=True)
-        proc.send_signal(sig)  # the client only, as `timeout` and `kill PID` send it
-        _, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-    return proc, err, workers
-
-
 @pytest.mark.slow
 def test_sigterm_to_batch_exits_143_and_says_so_in_batch_json(tmp_path) -> None:
     """SIGTERM to the batch client (what ``timeout`` and ``docker stop`` do): status 143, one
     error line, batch.json written with ``interrupted``, no worker process left running."""
-    psutil = pytest.importorskip("psutil")
-    proc, err, workers = _batch_signalled(tmp_path, signal.SIGTERM)
+    import psutil  # installed with distributed
+
+    proc, err, workers = batch_signalled(tmp_path, signal.SIGTERM)
     assert proc.returncode == 143, err
     assert "Traceback" not in err, err
     assert [line for line in err.splitlines() if line.startswith("error:")] == [
@@ -190,7 +151,7 @@ def test_sigterm_to_batch_exits_143_and_says_so_in_batch_json(tmp_path) -> None:
 def test_signal_to_the_batch_client_alone_leaks_no_semaphore(tmp_path, sig) -> None:
     """``kill PID`` rather than a terminal's Ctrl-C: the workers are not signalled, the
     videos they are tracking stop on the batch's stop event, nothing is left to clean up."""
-    proc, err, _ = _batch_signalled(tmp_path, sig)
+    proc, err, _ = batch_signalled(tmp_path, sig)
     assert proc.returncode == 128 + sig, err
     assert "leaked semaphore" not in err and "Traceback" not in err, err
 
