@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mvtrack.filters.base import BoolArray, FloatArray
+from mvtrack.filters.base import BoolArray, FloatArray, check_xy, check_z_mask
 from mvtrack.filters.structured.graph import PartGraph
 from mvtrack.filters.structured.params import SKFParams
 from mvtrack.filters.structured.state import SKFState, SKFTerms, add_part, init, predict
@@ -174,7 +174,7 @@ class StructuredPredictor:
 
     def init(self, xy: FloatArray) -> StructuredPredictorState:
         """State of new tracks first measured at ``xy`` (K, 2), parts at ``xy + offsets``."""
-        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        xy = check_xy("xy", xy)
         return self.init_parts(xy[:, None, :] + self.offsets[None])
 
     def predict(self, state: StructuredPredictorState) -> StructuredPredictorState:
@@ -201,8 +201,7 @@ class StructuredPredictor:
         self, state: StructuredPredictorState, z: FloatArray, mask: BoolArray
     ) -> StructuredPredictorState:
         """Whole-object update: ``z`` (N, 2) moves the rigid part layout; masked rows coast."""
-        z = np.asarray(z, dtype=float)
-        ok = np.asarray(mask, dtype=bool) & np.all(np.isfinite(z), axis=-1)
+        z, ok = check_z_mask(z, mask, state.xc.shape[0])
         pos = state.xc[..., :2]
         zp = z[:, None, :] + (pos - pos.mean(axis=1, keepdims=True))
         zp = np.where(ok[:, None, None], zp, np.nan)
