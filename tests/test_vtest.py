@@ -94,7 +94,12 @@ def test_real_signal_stops_cleanly(vtest_path, tmp_path, sig, status, word) -> N
     deadline = time.monotonic() + 60
     while not out.exists() and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)  # the folder appears when the frame loop starts
-    time.sleep(1.0)
+    # frames are being tracked once the hidden video file holds more than its header (however
+    # loaded the machine: a fixed sleep may end before the first frame)
+    while proc.poll() is None and time.monotonic() < deadline and not any(
+            p.stat().st_size > 4096 for p in out.iterdir() if p.name.startswith(".")):
+        time.sleep(0.05)
+    time.sleep(0.5)
     if proc.poll() is not None:
         pytest.skip("the whole video was tracked before the signal could be sent")
     proc.send_signal(getattr(signal, sig))
