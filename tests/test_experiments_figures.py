@@ -14,7 +14,7 @@ from matplotlib.text import Text
 from mvtrack.experiments import complexity as x2
 from mvtrack.experiments import timing as x3
 from mvtrack.experiments.stats import binomial_ci
-from mvtrack.sim.scenes import x4_nine_vehicles
+from mvtrack.sim.nine_vehicles import x4_nine_vehicles
 from mvtrack.types import TrackFrame
 from mvtrack.viz.plots import (
     PALETTE,

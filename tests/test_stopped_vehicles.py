@@ -13,8 +13,8 @@ import pytest
 def test_waiting_vehicles_keep_one_id_through_the_wait(tracker: str) -> None:
     from mvtrack.experiments import intersection as x5
     from mvtrack.experiments._video import track_scene
+    from mvtrack.sim.intersection import x5_intersection
     from mvtrack.sim.render import render_frames
-    from mvtrack.sim.scenes import x5_intersection
 
     scene = x5_intersection(0)
     opts = x5._settings(scene)[tracker]

@@ -2,7 +2,7 @@
 
 Setup (SPEC §5 X7): point targets, 100 frames; T1 from (20, 220) with v = (2.8, −2.0), T2
 from (20, 120) with v = (2.8, 0); both reach (160, 120) at frame 50
-(:func:`mvtrack.sim.scenes.x7_crossing`). Measurements are the true positions plus white
+(:func:`mvtrack.sim.crossing.x7_crossing`). Measurements are the true positions plus white
 noise σ = 1.5 px, no misses, no clutter, in random order each frame. Each track has a
 per-axis constant-acceleration KF (paper 1 eqs. 8–9, the model SPEC §2.1 assigns to paper 2)
 with R = σ² and q = 0.01, initialised from the measurements of frames 0–1 (position z₁,
@@ -28,7 +28,7 @@ from mvtrack.experiments.report import Report
 from mvtrack.experiments.stats import fmt_rate, paired, rate_of
 from mvtrack.filters import kalman
 from mvtrack.filters.models import constant_acceleration
-from mvtrack.sim.scenes import x7_crossing
+from mvtrack.sim.crossing import x7_crossing
 from mvtrack.types import Detections
 
 DEFAULT_RUNS = 100

@@ -1,6 +1,6 @@
 """X5: paper 1's intersection, reconstructed (Figs. 11-13, SPEC §5 X5).
 
-The synthetic intersection (:func:`mvtrack.sim.scenes.x5_intersection`: 320×240, 30 fps,
+The synthetic intersection (:func:`mvtrack.sim.intersection.x5_intersection`: 320×240, 30 fps,
 360 frames; 11 straight, 6 left-turning, 1 right-turning and 2 waiting vehicles; two-tone
 bodies, pixel noise σ = 3, ±1 px camera jitter, bright roadside poles) is rendered and run
 through the whole pipeline. The headline runs the specification's settings: the disturbance
@@ -40,7 +40,7 @@ from mvtrack.experiments._video import (
 )
 from mvtrack.experiments.report import Report
 from mvtrack.experiments.stats import fmt_rate, rate
-from mvtrack.sim.scenes import x5_intersection
+from mvtrack.sim.intersection import x5_intersection
 from mvtrack.tracking import paper1
 from mvtrack.types import TrackState
 

@@ -1,6 +1,6 @@
 """X8: paper 2's group of three people splitting behind a car (Fig. 4, SPEC §5 X8 as revised).
 
-The scene (:func:`mvtrack.sim.scenes.x8_splitting_group`: 320×240, 15 fps, 240 frames, 14
+The scene (:func:`mvtrack.sim.splitting_group.x8_splitting_group`: 320×240, 15 fps, 240 frames, 14
 targets) has P1–P3 walk together from the upper left as one blob and split at frame 60 at a
 parked white car, which hides at most the lower half of each person behind it, so the group's
 blob is detected in every frame and its track lives through the split. P1 walks diagonally to
@@ -39,7 +39,7 @@ from mvtrack.experiments._video import (
 )
 from mvtrack.experiments.report import Report
 from mvtrack.experiments.stats import fmt_rate, paired, rate, rate_of
-from mvtrack.sim.scenes import x8_splitting_group
+from mvtrack.sim.splitting_group import x8_splitting_group
 from mvtrack.tracking import paper2
 
 DISTANCES = ("uncoupled", "coupled", "mahalanobis")
