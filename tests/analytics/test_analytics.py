@@ -226,7 +226,7 @@ def test_example_settings_file_loads():
 
     from mvtrack.analytics import load_settings
 
-    s = load_settings(Path(__file__).parent.parent / "docs" / "analytics-example.toml")
+    s = load_settings(Path(__file__).resolve().parents[2] / "docs" / "analytics-example.toml")
     assert [line.name for line in s.lines] == ["middle"] and len(s.approaches) == 3
     assert s.interval == 20.0 and s.calibration is not None
 
