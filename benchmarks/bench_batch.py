@@ -92,8 +92,8 @@ def machine_speedup(n_iter: int = 20_000_000) -> float:
 
 def _make_source(kind: str, frames: int, folder: Path) -> tuple[Path, str]:
     if kind == "synthetic":
+        from mvtrack.sim.nine_vehicles import x4_nine_vehicles
         from mvtrack.sim.render import write_video
-        from mvtrack.sim.scenes import x4_nine_vehicles
 
         scene = x4_nine_vehicles()
         path = write_video(scene, folder / "x4.mp4", progress=False)

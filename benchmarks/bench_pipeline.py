@@ -95,8 +95,8 @@ def synthetic_video(folder: Path) -> tuple[Path, str]:
     """X5 at 320×240 as an MP4 (or the fallback scene); returns (path, description)."""
     path = folder / "x5.mp4"
     try:
+        from mvtrack.sim.intersection import x5_intersection
         from mvtrack.sim.render import write_video
-        from mvtrack.sim.scenes import x5_intersection
 
         scene = x5_intersection(0)
         write_video(scene, path, seed=0, size=(320, 240), progress=False)

@@ -94,10 +94,10 @@ def crowd_detections(
 def sim_scene(
     n: int, frames: int, seed: int
 ) -> tuple[np.ndarray, np.ndarray, list[Detections]]:
-    """The same scene from the project's simulator (:func:`mvtrack.sim.scenes.crowd`, which
+    """The same scene from the project's simulator (:func:`mvtrack.sim.crowd.crowd`, which
     keeps the speed inside 1–6 px/frame and reflects the whole box inside the image)."""
+    from mvtrack.sim.crowd import crowd
     from mvtrack.sim.detections import detections_from_scene
-    from mvtrack.sim.scenes import crowd
 
     scene = crowd(n, frames, seed=seed)
     xy = scene.xy.reshape(frames, n, 2)

@@ -48,8 +48,8 @@ def batch_signalled(tmp_path: Path, sig: int, group: bool = False) -> tuple[Any,
 
     import psutil  # installed with distributed
 
+    from mvtrack.sim.nine_vehicles import x4_nine_vehicles
     from mvtrack.sim.render import write_video
-    from mvtrack.sim.scenes import x4_nine_vehicles
 
     folder = tmp_path / "in"
     folder.mkdir()

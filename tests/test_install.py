@@ -22,7 +22,7 @@ TUD = Path(mm.__file__).parent / "data"
 
 #: TrackEval 1.3.0's own pipeline (``trackeval.Evaluator`` with ``MotChallenge2DBox``,
 #: BENCHMARK "MOT15", the package installed from PyPI) on motmetrics' TUD files: the mean over
-#: α of each score. tests/test_metrics.py runs that pipeline live where TrackEval is installed.
+#: α of each score. tests/eval/test_metrics.py runs that pipeline live where TrackEval is installed.
 TRACKEVAL_1_3_0 = {
     "TUD-Campus": {
         "HOTA": 0.3913974378451139, "DetA": 0.418047030142763, "AssA": 0.36912068120832836,

@@ -137,7 +137,7 @@ def count_errors(estimated: dict[str, int], truth: dict[str, int]) -> dict[str, 
 
 # ---------------------------------------------------------------------- scenes with truth
 def scene_points(scene: Any, window: int = 7) -> TrackPoints:
-    """The visible ground-truth rows of a simulated :class:`~mvtrack.sim.scenes.Scene` as
+    """The visible ground-truth rows of a simulated :class:`~mvtrack.sim.scene.Scene` as
     tracks (object id = track id; velocities from :func:`~mvtrack.analytics.tracks.
     local_fit`): what a perfect tracker would output."""
     vis = scene.visible
@@ -172,7 +172,7 @@ def truth_movement_counts(origin: list[str], destination: list[str]) -> dict[str
     return out
 
 
-#: X5 (mvtrack.sim.scenes.x5_intersection): approach names by direction of travel on entry
+#: X5 (mvtrack.sim.intersection.x5_intersection): approach names by direction of travel on entry
 X5_ORIGIN = ("W", "N", "E", "S")
 X5_CATEGORIES = ("straight", "left", "right", "waiting")
 
@@ -180,7 +180,7 @@ X5_CATEGORIES = ("straight", "left", "right", "waiting")
 def x5_settings() -> dict[str, Any]:
     """The ``[analytics]`` table of X5: its four approaches (the road arms outside the
     60 × 60 px intersection box), a nominal 0.25 m/px (a 16 px vehicle ≈ 4 m)."""
-    from mvtrack.sim.scenes import X5_CENTRE, X5_ROAD_HALF
+    from mvtrack.sim.intersection import X5_CENTRE, X5_ROAD_HALF
 
     cx, cy = X5_CENTRE
     h, m = X5_ROAD_HALF, X5_ROAD_HALF + 2.0

@@ -22,8 +22,8 @@ def run_demo(
     from mvtrack.eval.metrics import evaluate
     from mvtrack.io.atomic import write_json
     from mvtrack.io.mot import MotTable, write_mot
+    from mvtrack.sim.intersection import x5_intersection
     from mvtrack.sim.render import render_frames
-    from mvtrack.sim.scenes import x5_intersection
     from mvtrack.video import build_detector, build_tracker, resolve_settings, track_to_folder
     from mvtrack.viz.plots import (
         TrackRows,

@@ -14,7 +14,7 @@ The frame-by-frame matching is the algorithm of motmetrics' ``MOTAccumulator.upd
 It runs on the sparse list of overlapping pairs (:func:`~mvtrack.eval.iou.overlapping_pairs`)
 instead of one dense matrix per frame, with the state of every object in arrays, so its cost
 grows with the boxes and not with their product. The counts and the ratios made from them
-equal motmetrics' on the same input (``tests/test_metrics.py`` checks them against
+equal motmetrics' on the same input (``tests/eval/test_metrics.py`` checks them against
 motmetrics' own accumulator on the MOT15 sequences).
 
 Identity metrics: ``IDTP`` is the largest total, over a one-to-one pairing of ground-truth and

@@ -16,7 +16,7 @@ summed per-frame Jaccard overlap over ``|g| + |t| - overlap``), as TrackEval doe
 TrackEval solves one dense ``N × M`` assignment per frame and holds every frame's similarity
 matrix at once (2.4 GB for 1 000 targets over 300 frames). Here the same quantities are built
 from the sparse list of overlapping pairs and the assignment of a frame runs only where boxes
-compete (:func:`~mvtrack.eval.assignment.max_weight_matching`). ``tests/test_metrics.py``
+compete (:func:`~mvtrack.eval.assignment.max_weight_matching`). ``tests/eval/test_metrics.py``
 checks the result against TrackEval's own MOTChallenge pipeline.
 """
 

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 from mvtrack.config import RunSettings
-from mvtrack.sim.scenes import Scene
+from mvtrack.sim.scene import Scene
 from mvtrack.tracking import Tracker, TrackerConfig, TrackLog
 from mvtrack.video import PipelineResult, build_rescuer, resolve_settings, run_frames
 

@@ -1,8 +1,8 @@
 """X4: paper 1's synthetic video of 9 vehicles, KF vs RLS end to end (Figs. 9-10, SPEC §5 X4).
 
-The scene (:func:`mvtrack.sim.scenes.x4_nine_vehicles`: 320×240, 30 fps, 240 frames, flat grey,
-no noise) is rendered and run through the whole pipeline: disturbance map exactly as SPEC §1.1
-[R] (T = 25, β_k = max(1/(k+1), 0.02), B₀ = I₀, 3×3 opening, area ≥ 20 px, no closing),
+The scene (:func:`mvtrack.sim.nine_vehicles.x4_nine_vehicles`: 320×240, 30 fps, 240 frames,
+flat grey, no noise) is rendered and run through the whole pipeline: disturbance map exactly as
+SPEC §1.1 [R] (T = 25, β_k = max(1/(k+1), 0.02), B₀ = I₀, 3×3 opening, area ≥ 20 px, no closing),
 paper 1's tracker (:func:`mvtrack.tracking.paper1` with the synthetic experiment's 10 px
 circular gate, non-exclusive nearest, 3-frame coasting, warm-up gate centre ``2y_k − y_{k−1}``)
 with the per-axis CA Kalman filter or the RLS predictor (M = 3, λ = 0.98), both with
@@ -33,7 +33,7 @@ from mvtrack.experiments._video import (
     trajectory_plot,
 )
 from mvtrack.experiments.report import Report
-from mvtrack.sim.scenes import x4_nine_vehicles
+from mvtrack.sim.nine_vehicles import x4_nine_vehicles
 from mvtrack.tracking import TrackerConfig, paper1
 
 PREDICTORS = ("kalman-ca", "rls")

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from mvtrack.experiments import predictors as x1
+from mvtrack.experiments import predictors_measure as x1
 from mvtrack.experiments.report import Report
 from mvtrack.filters import fast, scalar
 from mvtrack.filters.base import FloatArray

@@ -1,8 +1,12 @@
 """Simulated scenes with ground truth: trajectories, detections and rendered video.
 
-* :mod:`mvtrack.sim.scenes` — :class:`~mvtrack.sim.scenes.Scene` (ground truth as a struct of
-  arrays) and the builders ``x4_nine_vehicles``, ``x5_intersection``, ``x7_crossing``,
-  ``x8_splitting_group``, ``crowd`` and ``build(name, ...)``.
+* :mod:`mvtrack.sim.scene` — :class:`~mvtrack.sim.scene.Scene` (ground truth as a struct of
+  arrays); :mod:`mvtrack.sim.paths` — the paths vehicles follow.
+* :mod:`mvtrack.sim.scenes` — the scenes by name, ``build(name, ...)``; one module a family:
+  :mod:`~mvtrack.sim.nine_vehicles` (``x4_nine_vehicles``), :mod:`~mvtrack.sim.intersection`
+  (``x5_intersection``), :mod:`~mvtrack.sim.crossing` (``x7_crossing``),
+  :mod:`~mvtrack.sim.splitting_group` (``x8_splitting_group``), :mod:`~mvtrack.sim.crowd`
+  (``crowd``).
 * :mod:`mvtrack.sim.detections` — ``detections_from_scene`` / ``detections_with_truth``:
   noisy detections with misses and clutter, one :class:`~mvtrack.types.Detections` per frame.
 * :mod:`mvtrack.sim.render` — ``render_frames``, ``render_background``, ``write_video``:

@@ -1,4 +1,4 @@
-"""Build a :class:`~mvtrack.sim.scenes.Scene` from dense per-frame arrays of objects.
+"""Build a :class:`~mvtrack.sim.scene.Scene` from dense per-frame arrays of objects.
 
 The scenes of the analytics (:mod:`mvtrack.sim.queue`, :mod:`mvtrack.sim.speed`) compute
 their objects as ``(F, N, ...)`` arrays (NaN where an object is absent); this turns them
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.sim.scenes import Scene
+from mvtrack.sim.scene import Scene
 
 FloatArray = NDArray[np.float64]
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.sim.scenes import Scene
+from mvtrack.sim.scene import Scene
 from mvtrack.types import Detections
 
 IntArray = NDArray[np.int64]

@@ -24,7 +24,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.sim.dense import scene_from_dense
-from mvtrack.sim.scenes import X5_COLORS, Path2D, Scene
+from mvtrack.sim.intersection import X5_COLORS
+from mvtrack.sim.paths import Path2D
+from mvtrack.sim.scene import Scene
 
 FloatArray = NDArray[np.float64]
 

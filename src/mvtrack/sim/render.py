@@ -1,4 +1,4 @@
-"""Synthetic traffic video: render a :class:`~mvtrack.sim.scenes.Scene` to BGR frames.
+"""Synthetic traffic video: render a :class:`~mvtrack.sim.scene.Scene` to BGR frames.
 
 Each scene gets a background drawn once (flat grey for X4 as SPEC X4 prescribes; asphalt
 roads with lane markings, stop lines and bright roadside poles on textured ground for X5;
@@ -25,7 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.io.atomic import atomic_path
-from mvtrack.sim.scenes import X5_CENTRE, X5_LANE, X5_ROAD_HALF, X5_STOP, Scene
+from mvtrack.sim.intersection import X5_CENTRE, X5_LANE, X5_ROAD_HALF, X5_STOP
+from mvtrack.sim.scene import Scene
 
 Frame = NDArray[np.uint8]
 _SHIFT = 4  # OpenCV fixed-point bits: sub-pixel vertices at 1/16 px

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.sim.dense import scene_from_dense
-from mvtrack.sim.scenes import Scene
+from mvtrack.sim.scene import Scene
 
 FloatArray = NDArray[np.float64]
 

@@ -8,7 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack.experiments import predictors as x1
+from mvtrack.experiments import predictors
+from mvtrack.experiments import predictors_measure as x1
 from mvtrack.experiments.report import write_report
 from mvtrack.filters import kalman
 from mvtrack.filters.models import constant_acceleration
@@ -50,7 +51,7 @@ def test_rls_error_at_k_is_prediction_from_earlier_samples() -> None:
 
 
 def test_report_has_keys_and_sane_values(tmp_path) -> None:
-    report = x1.run(runs=12, seed=3)
+    report = predictors.run(runs=12, seed=3)
     fig = report.figures
     for key in ("kf_mse_windows", "rls_mse_windows", "kf_mse", "rls_mse", "lambda_sweep",
                 "paper", "windows"):
@@ -76,11 +77,11 @@ def test_report_has_keys_and_sane_values(tmp_path) -> None:
 
 
 def test_same_seed_same_result_and_runs_validated() -> None:
-    a = x1.run(runs=2, seed=5).figures
-    b = x1.run(runs=2, seed=5).figures
+    a = predictors.run(runs=2, seed=5).figures
+    b = predictors.run(runs=2, seed=5).figures
     assert a["kf_mse_windows"] == b["kf_mse_windows"]
     with pytest.raises(ValueError, match="runs"):
-        x1.run(runs=0)
+        predictors.run(runs=0)
 
 
 def test_oscillation_measure_detects_alternation_only_after_the_changes() -> None:
@@ -106,7 +107,7 @@ def test_oscillation_measure_detects_alternation_only_after_the_changes() -> Non
 
 
 def test_rls_weights_average_the_last_three_samples_and_oscillate_more_than_the_kf() -> None:
-    report = x1.run(runs=30, seed=1)
+    report = predictors.run(runs=30, seed=1)
     fig = report.figures
     sw = fig["lambda_sweep"]["0.98"]
     w = np.array(sw["mean_weights_after_warmup"])

@@ -24,7 +24,7 @@ from mvtrack.tracking import TrackLog
 from mvtrack.types import Detections, TrackFrame
 from mvtrack.video import run_frames
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture()

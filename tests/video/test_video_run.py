@@ -412,7 +412,8 @@ def test_a_stopped_vehicle_keeps_its_id_by_template_matching(tmp_path) -> None:
 def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() -> None:
     """The guard around the NCC search: found where last measured, and not covered by a
     detection — checked on a stand-in search that finds every track. (That a track has driven
-    somewhere before it is searched is the template bank's check, tests/test_template.py.)"""
+    somewhere before it is searched is the template bank's check,
+    tests/detection/test_template.py.)"""
     from types import SimpleNamespace
 
     from mvtrack.video import StoppedVehicleRescuer

@@ -13,15 +13,16 @@ import pytest
 def test_waiting_vehicles_keep_one_id_through_the_wait(tracker: str) -> None:
     from mvtrack.experiments import intersection as x5
     from mvtrack.experiments._video import track_scene
+    from mvtrack.experiments.intersection_measure import WAIT
+    from mvtrack.sim.intersection import x5_intersection
     from mvtrack.sim.render import render_frames
-    from mvtrack.sim.scenes import x5_intersection
 
     scene = x5_intersection(0)
     opts = x5._settings(scene)[tracker]
     run = track_scene(scene, opts["config"], seed=0, frames=list(render_frames(scene, 0)),
                       detector_params=opts["detector_params"])
     for v in scene.ids_of("waiting").tolist():
-        tid, share = run.match.followed_share(v, x5.WAIT)
+        tid, share = run.match.followed_share(v, WAIT)
         assert share >= 0.99, f"vehicle {v}: one track follows {share:.0%} of its wait"
         # the same track came with it to the stop line and leaves with it
         whole_tid, whole = run.match.followed_share(v)

@@ -176,7 +176,7 @@ def test_x5_example_file_holds_the_x5_approaches() -> None:
     from mvtrack.analytics import load_settings, settings_from_dict
     from mvtrack.analytics.accuracy import x5_settings
 
-    doc = load_settings(Path(__file__).parent.parent / "docs" / "analytics-x5.toml")
+    doc = load_settings(Path(__file__).resolve().parents[2] / "docs" / "analytics-x5.toml")
     ref = settings_from_dict(x5_settings())
     assert [a.name for a in doc.approaches] == [a.name for a in ref.approaches]
     for a, b in zip(doc.approaches, ref.approaches, strict=True):

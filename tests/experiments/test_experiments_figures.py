@@ -14,7 +14,7 @@ from matplotlib.text import Text
 from mvtrack.experiments import complexity as x2
 from mvtrack.experiments import timing as x3
 from mvtrack.experiments.stats import binomial_ci
-from mvtrack.sim.scenes import x4_nine_vehicles
+from mvtrack.sim.nine_vehicles import x4_nine_vehicles
 from mvtrack.types import TrackFrame
 from mvtrack.viz.plots import (
     PALETTE,
@@ -247,8 +247,9 @@ def test_fig1_regions_fit_in_the_axes_and_titles_do_not_overlap() -> None:
 
 def test_crossing_bars_show_the_literal_eq10_as_a_failure(monkeypatch) -> None:
     from mvtrack.experiments import crossing as x7
+    from mvtrack.experiments import crossing_measure
 
-    monkeypatch.setattr(x7, "RHO_SWEEP", (1.0,))
+    monkeypatch.setattr(crossing_measure, "RHO_SWEEP", (1.0,))
     report = x7.run(runs=6, seed=0)
     fig = report.plots["swap_rates"]
     head = fig.axes[0]

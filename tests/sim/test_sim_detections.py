@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mvtrack.sim.crowd import crowd
 from mvtrack.sim.detections import detections_from_scene, detections_with_truth
-from mvtrack.sim.scenes import crowd, x4_nine_vehicles, x8_splitting_group
+from mvtrack.sim.nine_vehicles import x4_nine_vehicles
+from mvtrack.sim.splitting_group import x8_splitting_group
 
 
 @pytest.fixture(scope="module")

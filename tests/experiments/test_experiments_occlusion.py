@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mvtrack.experiments import get
-from mvtrack.experiments.occlusion import measurements_from_labels, run_independent, run_skf
+from mvtrack.experiments.occlusion_measure import measurements_from_labels, run_independent, run_skf
 from mvtrack.experiments.report import write_report
 from mvtrack.filters.structured import SKFParams
 from mvtrack.sim.occlusion import render_occlusion_scene

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.experiments import predictors as x1
+from mvtrack.experiments import predictors_measure as x1
 from mvtrack.experiments import timing as x3
 from mvtrack.filters import rls
 

@@ -9,7 +9,7 @@ import pytest
 
 from mvtrack.experiments._video import breaks, match_to_truth
 from mvtrack.experiments.report import write_report
-from mvtrack.sim.scenes import x4_nine_vehicles
+from mvtrack.sim.nine_vehicles import x4_nine_vehicles
 from mvtrack.tracking import TrackLog
 from mvtrack.types import TrackFrame
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mvtrack.association import ASSIGN_RULES, DISTANCES
-from mvtrack.experiments import coupled_gate, crossing, get
+from mvtrack.experiments import coupled_gate, crossing, crossing_measure, get
 from mvtrack.experiments.report import write_report
 
 
@@ -36,7 +36,7 @@ def test_coupled_gate_evaluate_is_shift_invariant_except_literal() -> None:
 
 
 def _noise_free(runs: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    xy = crossing.truth(runs, seed, 0.0)
+    xy = crossing_measure.truth(runs, seed, 0.0)
     flip = np.random.default_rng(seed).random(xy.shape[:2]) < 0.5
     return xy, flip
 
@@ -46,7 +46,7 @@ def test_crossing_without_noise_never_swaps(rule: str) -> None:
     """Exact measurements: every track keeps its own target through the crossing."""
     z, flip = _noise_free(3, 1)
     for dist in ("euclidean", "coupled", "mahalanobis"):
-        taken, est = crossing.simulate(z, flip, dist, rule)
+        taken, est = crossing_measure.simulate(z, flip, dist, rule)
         # at frame 50 both targets are at (160, 120): the two measurements are identical
         # and the nearest rule may hand both tracks the same one
         keep = np.r_[2:50, 51:100]
@@ -56,20 +56,20 @@ def test_crossing_without_noise_never_swaps(rule: str) -> None:
 
 def test_crossing_truth_meets_at_frame_50() -> None:
     for jitter in (0.0, 0.25):
-        xy = crossing.truth(2, 3, jitter)
+        xy = crossing_measure.truth(2, 3, jitter)
         np.testing.assert_allclose(xy[:, 50], [[[160.0, 120.0]] * 2] * 2, atol=1e-9)
-    xy = crossing.truth(2, 3, 0.0)
+    xy = crossing_measure.truth(2, 3, 0.0)
     np.testing.assert_allclose(xy[:, 0], [[[20.0, 220.0], [20.0, 120.0]]] * 2, atol=1e-9)
     np.testing.assert_allclose(xy[:, 1] - xy[:, 0], [[[2.8, -2.0], [2.8, 0.0]]] * 2, atol=1e-9)
 
 
 def test_crossing_runs_are_independent_in_the_batch() -> None:
     rng = np.random.default_rng(5)
-    z, flip = crossing.measurements(crossing.truth(4, 5, 0.25), rng)
+    z, flip = crossing_measure.measurements(crossing_measure.truth(4, 5, 0.25), rng)
     for dist, rule in (("coupled", "nearest"), ("uncoupled", "optimal"), ("iou", "greedy")):
-        batch, _ = crossing.simulate(z, flip, dist, rule)
+        batch, _ = crossing_measure.simulate(z, flip, dist, rule)
         for i in (0, 3):
-            alone, _ = crossing.simulate(z[i : i + 1], flip[i : i + 1], dist, rule)
+            alone, _ = crossing_measure.simulate(z[i : i + 1], flip[i : i + 1], dist, rule)
             np.testing.assert_array_equal(batch[i], alone[0])
 
 
@@ -77,7 +77,7 @@ def test_crossing_swap_is_the_majority_of_the_last_frames() -> None:
     taken = np.zeros((3, 100, 2), dtype=np.intp)
     taken[1, -11:, 0] = 1  # 11 of the last 20 frames on target 2: a swap
     taken[2, -10:, 0] = 1  # 10 of 20: not a majority
-    assert crossing._swaps(taken).tolist() == [False, True, False]
+    assert crossing_measure._swaps(taken).tolist() == [False, True, False]
 
 
 def test_crossing_report_keys_and_ranges() -> None:

@@ -178,7 +178,7 @@ def test_queue_scene_counts_exact_from_true_tracks(seed):
 
 
 def test_x5_waiting_and_turns_from_true_tracks():
-    from mvtrack.sim.scenes import x5_intersection
+    from mvtrack.sim.intersection import x5_intersection
 
     sc = x5_intersection(2)
     res = analyse(scene_points(sc), settings_from_dict(x5_settings()), sc.fps, sc.n_frames)
@@ -226,7 +226,7 @@ def test_example_settings_file_loads():
 
     from mvtrack.analytics import load_settings
 
-    s = load_settings(Path(__file__).parent.parent / "docs" / "analytics-example.toml")
+    s = load_settings(Path(__file__).resolve().parents[2] / "docs" / "analytics-example.toml")
     assert [line.name for line in s.lines] == ["middle"] and len(s.approaches) == 3
     assert s.interval == 20.0 and s.calibration is not None
 

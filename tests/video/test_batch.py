@@ -14,8 +14,9 @@ from _media import batch_signalled, box_video
 from mvtrack.cli import main
 from mvtrack.cli.batch import expand_videos
 from mvtrack.config import RunSettings
+from mvtrack.sim.crossing import x7_crossing
+from mvtrack.sim.nine_vehicles import x4_nine_vehicles
 from mvtrack.sim.render import write_video
-from mvtrack.sim.scenes import x4_nine_vehicles, x7_crossing
 from mvtrack.video.batch import track_many
 from mvtrack.video.jobs import BatchItem, output_names, track_one
 

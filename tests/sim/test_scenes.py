@@ -7,6 +7,7 @@ import pytest
 
 from mvtrack.io.mot import read_mot, write_mot
 from mvtrack.sim import scenes as S
+from mvtrack.sim.scene import _visibility
 
 
 def _pair(scene: S.Scene, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -200,11 +201,11 @@ def test_lower_half_occluder_hides_only_the_lower_half_of_boxes_behind_it() -> N
     full = [{"xy": (50.0, 50.0), "wh": (40.0, 20.0)}]
     xy = np.array([[50.0, 44.0], [50.0, 40.0], [50.0, 55.0], [200.0, 50.0]])
     wh = np.tile([8.0, 16.0], (4, 1))
-    _, vis = S._visibility(xy, wh, (320, 240), occ)
+    _, vis = _visibility(xy, wh, (320, 240), occ)
     # behind the car (feet at 52, 48): the part of the lower half inside it; in front (feet at
     # 63, below the car's edge at 60): nothing; far away: nothing
     np.testing.assert_allclose(vis, [0.5, 1.0 - 8 * 8 / 128, 1.0, 1.0])
-    _, vis_full = S._visibility(xy, wh, (320, 240), full)
+    _, vis_full = _visibility(xy, wh, (320, 240), full)
     np.testing.assert_allclose(vis_full, [1 - 8 * 12 / 128, 1 - 8 * 8 / 128, 1 - 8 * 13 / 128,
                                           1.0])
 
