@@ -16,14 +16,9 @@ from mvtrack.experiments import timing as x3
 from mvtrack.experiments.stats import binomial_ci
 from mvtrack.sim.nine_vehicles import x4_nine_vehicles
 from mvtrack.types import TrackFrame
-from mvtrack.viz.plots import (
-    PALETTE,
-    TrackRows,
-    contrast_ratio,
-    grouped_bars,
-    place_labels,
-    trajectory_figure,
-)
+from mvtrack.viz.colors import PALETTE, contrast_ratio
+from mvtrack.viz.labels import place_labels
+from mvtrack.viz.plots import TrackRows, grouped_bars, trajectory_figure
 
 
 def rendered(fig: Figure) -> np.ndarray:
@@ -148,7 +143,7 @@ def _rows(paths: dict[int, np.ndarray]) -> TrackRows:
 
 
 def test_trajectories_read_on_the_x4_road_with_truth_and_a_legend() -> None:
-    from mvtrack.sim.render import render_background
+    from mvtrack.sim.backgrounds import render_background
 
     scene = x4_nine_vehicles()
     _, xy = scene.trajectory(9)  # V9, the fast curving vehicle

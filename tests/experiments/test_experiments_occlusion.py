@@ -101,7 +101,7 @@ def test_occlusion_experiment_report(tmp_path, monkeypatch) -> None:
     assert len(bars) == len(sweep)
     from matplotlib.colors import to_hex
 
-    from mvtrack.viz.plots import FAILURE_COLOR
+    from mvtrack.viz.colors import FAILURE_COLOR
 
     for p, key in zip(bars, sweep, strict=True):
         failed = not sweep[key]["target_met"]

@@ -11,13 +11,15 @@ import pytest
 
 from mvtrack.sim import render as R
 from mvtrack.sim import scenes as S
+from mvtrack.sim.backgrounds import render_background
+from mvtrack.sim.style import RenderStyle, default_style
 
 
 def _luma(img: np.ndarray) -> np.ndarray:
     return S.luminance(img)
 
 
-def _frame(scene: S.Scene, f: int, seed: int = 0, style: R.RenderStyle | None = None):
+def _frame(scene: S.Scene, f: int, seed: int = 0, style: RenderStyle | None = None):
     return next(islice(R.render_frames(scene, seed, style=style), f, None))
 
 
@@ -38,7 +40,7 @@ def test_any_output_size_scales_the_scene() -> None:
     sc = S.x4_nine_vehicles()
     big = next(R.render_frames(sc, 0, size=(640, 480)))
     assert big.shape == (480, 640, 3)
-    bg = R.render_background(sc, 0, size=(640, 480))
+    bg = render_background(sc, 0, size=(640, 480))
     changed = np.argwhere(np.abs(_luma(big) - _luma(bg)) > 30)
     # V1 at frame 0 is centred on (10, 84): (20, 168) at twice the size, 24×16 px.
     near = changed[np.linalg.norm(changed - [168, 20], axis=1) < 16]
@@ -51,7 +53,7 @@ def test_any_output_size_scales_the_scene() -> None:
 @pytest.mark.parametrize("f", [0, 60, 73, 150])
 def test_x4_vehicles_are_where_the_truth_says_and_nowhere_else(f: int) -> None:
     sc = S.x4_nine_vehicles()
-    img, bg = _frame(sc, f), R.render_background(sc)
+    img, bg = _frame(sc, f), render_background(sc)
     diff = np.abs(_luma(img) - _luma(bg))
     rows = sc.rows(f)
     yy, xx = np.mgrid[0 : 240, 0 : 320]
@@ -69,8 +71,8 @@ def test_x4_vehicles_are_where_the_truth_says_and_nowhere_else(f: int) -> None:
 
 def test_x5_vehicles_are_drawn_inside_their_boxes() -> None:
     sc = S.x5_intersection(0)
-    clean = replace(R.default_style(sc), noise_sigma=0.0, jitter=0)
-    bg = R.render_background(sc, 3, style=clean)
+    clean = replace(default_style(sc), noise_sigma=0.0, jitter=0)
+    bg = render_background(sc, 3, style=clean)
     yy, xx = np.mgrid[0:240, 0:320]
     checked = 0
     for f, img in enumerate(R.render_frames(sc, 3, style=clean)):
@@ -95,7 +97,7 @@ def test_x5_vehicles_are_drawn_inside_their_boxes() -> None:
 
 def test_x5_has_sensor_noise_of_sigma_3_and_one_pixel_jitter() -> None:
     sc = S.x5_intersection(0)
-    bg = _luma(R.render_background(sc, 5)).astype(np.float64)
+    bg = _luma(render_background(sc, 5)).astype(np.float64)
     gray = np.array([0.114, 0.587, 0.299])
     shifts = []
     for f, img in enumerate(islice(R.render_frames(sc, 5), 12)):
@@ -124,8 +126,8 @@ def test_x5_has_sensor_noise_of_sigma_3_and_one_pixel_jitter() -> None:
 
 def test_x8_car_is_drawn_over_the_lower_halves_of_the_people() -> None:
     sc = S.x8_splitting_group(0)
-    clean = replace(R.default_style(sc), noise_sigma=0.0)
-    bg = R.render_background(sc, 0, style=clean)
+    clean = replace(default_style(sc), noise_sigma=0.0)
+    bg = render_background(sc, 0, style=clean)
     img = _frame(sc, 56, style=clean)
     changed = np.abs(img.astype(int) - bg.astype(int)).sum(axis=2) > 30
     p2 = sc.xy[(sc.frame == 56) & (sc.id == 2)][0]  # P2 behind the car, at (85.2, 56.8)
@@ -179,6 +181,6 @@ def test_write_video_leaves_nothing_when_rendering_fails(tmp_path, monkeypatch) 
 
 def test_bad_style_is_refused() -> None:
     with pytest.raises(ValueError, match="background"):
-        R.RenderStyle(background="space")
+        RenderStyle(background="space")
     with pytest.raises(ValueError):
-        R.RenderStyle(noise_sigma=-1)
+        RenderStyle(noise_sigma=-1)

@@ -57,13 +57,14 @@ def track_scene(
     """Render ``scene`` with ``seed`` (or use ``frames``), track it, match to the truth.
 
     ``prime`` > 0 first shows the detector that many frames of the empty scene
-    (:func:`mvtrack.sim.render.render_background`), as a camera that has been running before
-    the sequence starts: the disturbance map's background then holds the empty road instead of
-    ``B_0 = I_0`` with the vehicles in it (which leaves a ghost blob behind every vehicle that
-    is in view at frame 0).
+    (:func:`mvtrack.sim.backgrounds.render_background`), as a camera that has been running
+    before the sequence starts: the disturbance map's background then holds the empty road
+    instead of ``B_0 = I_0`` with the vehicles in it (which leaves a ghost blob behind every
+    vehicle that is in view at frame 0).
     """
     from mvtrack.detection import make_detector
-    from mvtrack.sim.render import render_background, render_frames
+    from mvtrack.sim.backgrounds import render_background
+    from mvtrack.sim.render import render_frames
 
     if detector_params is None:  # the pipeline's defaults for this image size
         paper = RunSettings(detector=PAPER_DETECTOR)
@@ -370,7 +371,7 @@ def trajectory_plot(
     ``group_of(obj_id)``, default the object's category) or in ``spurious`` when that is
     none; the true paths of the objects are drawn dashed beside them.
     """
-    from mvtrack.sim.render import render_background
+    from mvtrack.sim.backgrounds import render_background
     from mvtrack.viz.plots import TrackRows, trajectory_figure
 
     rows = TrackRows.from_frames(run.log)

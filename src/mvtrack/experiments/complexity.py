@@ -275,7 +275,8 @@ def _plot(kf: dict[str, int], rls_: dict[str, int], fast_kf: dict[str, int],
     """Table 1 as bars: the paper's counts beside ours, per filter and operation."""
     from matplotlib.figure import Figure
 
-    from mvtrack.viz.plots import PALETTE, grouped_bars
+    from mvtrack.viz.colors import PALETTE
+    from mvtrack.viz.plots import grouped_bars
 
     fig = Figure(figsize=(10, 4), layout="constrained")
     axes = fig.subplots(1, 2)

@@ -141,7 +141,7 @@ def _plot() -> Any:
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
-    from mvtrack.viz.plots import PALETTE
+    from mvtrack.viz.colors import PALETTE
 
     fig = Figure(figsize=(10, 5.6), layout="constrained")
     axes = fig.subplots(1, 2)

@@ -80,7 +80,8 @@ def report_plots(xy: FloatArray, example: Any, res: dict, res_j: dict) -> dict[s
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 
-    from mvtrack.viz.plots import FAILURE_COLOR, PALETTE, TRUTH_COLOR, grouped_bars
+    from mvtrack.viz.colors import FAILURE_COLOR, PALETTE, TRUTH_COLOR
+    from mvtrack.viz.plots import grouped_bars
 
     z0, est = example
     plots: dict[str, Any] = {}

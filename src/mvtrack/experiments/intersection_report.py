@@ -107,7 +107,8 @@ machine.
 def rates_plot(summary: dict[str, Any]) -> Any:
     from matplotlib.figure import Figure
 
-    from mvtrack.viz.plots import PALETTE, grouped_bars
+    from mvtrack.viz.colors import PALETTE
+    from mvtrack.viz.plots import grouped_bars
 
     fig = Figure(figsize=(11, 4.2), layout="constrained")
     left, right = fig.subplots(1, 2, sharey=True)

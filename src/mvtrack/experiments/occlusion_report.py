@@ -22,7 +22,7 @@ def designs_plot(fig: dict[str, Any]) -> Any:
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 
-    from mvtrack.viz.plots import FAILURE_COLOR, PALETTE
+    from mvtrack.viz.colors import FAILURE_COLOR, PALETTE
 
     runs = {"SPEC default": fig, **fig["variants"]}
     names = list(runs)
@@ -115,7 +115,7 @@ def report_plots(
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 
-    from mvtrack.viz.plots import FAILURE_COLOR, PALETTE, TRUTH_COLOR
+    from mvtrack.viz.colors import FAILURE_COLOR, PALETTE, TRUTH_COLOR
 
     t = np.arange(meas.z.shape[0])
     spec, old, cv = per[HEADLINE][0], per["Q_r = Q_c"][0], per["CV model"][0]

@@ -95,7 +95,8 @@ def report_notes(fig: dict[str, Any]) -> str:
 def report_plots(p, acc, y, e_kf, errs, mse_kf, sweep) -> dict[str, Any]:
     from matplotlib.figure import Figure
 
-    from mvtrack.viz.plots import PALETTE, TRUTH_COLOR, grouped_bars
+    from mvtrack.viz.colors import PALETTE, TRUTH_COLOR
+    from mvtrack.viz.plots import grouped_bars
 
     t = np.arange(N_SAMPLES) * DT
     k = np.arange(N_SAMPLES)

@@ -101,7 +101,8 @@ continues the group's track on him.
 def outcome_plot(summary: dict[str, Any]) -> Any:
     from matplotlib.figure import Figure
 
-    from mvtrack.viz.plots import FAILURE_COLOR, PALETTE, grouped_bars
+    from mvtrack.viz.colors import FAILURE_COLOR, PALETTE
+    from mvtrack.viz.plots import grouped_bars
 
     fig = Figure(figsize=(11, 4.4), layout="constrained")
     left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": (1.6, 1.0)})
@@ -138,7 +139,7 @@ def split_plot(runs: dict[str, SceneRun], p1: dict[str, dict[str, Any]]) -> Any:
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
 
-    from mvtrack.viz.plots import FAILURE_COLOR, PALETTE, TRUTH_COLOR, halo
+    from mvtrack.viz.colors import FAILURE_COLOR, PALETTE, TRUTH_COLOR, halo
 
     fig = Figure(figsize=(12, 4.6), layout="constrained")
     axes = fig.subplots(1, len(runs), sharey=True)

@@ -312,7 +312,7 @@ them made the difference.
 def _v9_plot(res: dict[str, Any], names: list[str]) -> Any:
     from matplotlib.figure import Figure
 
-    from mvtrack.viz.plots import PALETTE
+    from mvtrack.viz.colors import PALETTE
 
     fig = Figure(figsize=(8, 3.8), layout="constrained")
     ax = fig.subplots()

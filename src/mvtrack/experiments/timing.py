@@ -257,7 +257,8 @@ def _plot(rows: list[dict[str, Any]], batched: dict[str, float]) -> Any:
     """Table 2: the RLS/KF time ratio per N as bars beside the paper's, and the times."""
     from matplotlib.figure import Figure
 
-    from mvtrack.viz.plots import PALETTE, grouped_bars
+    from mvtrack.viz.colors import PALETTE
+    from mvtrack.viz.plots import grouped_bars
 
     fig = Figure(figsize=(11, 4.2), layout="constrained")
     left, right = fig.subplots(1, 2)

@@ -9,6 +9,8 @@
   (``crowd``).
 * :mod:`mvtrack.sim.detections` — ``detections_from_scene`` / ``detections_with_truth``:
   noisy detections with misses and clutter, one :class:`~mvtrack.types.Detections` per frame.
-* :mod:`mvtrack.sim.render` — ``render_frames``, ``render_background``, ``write_video``:
-  synthetic traffic video (BGR uint8 frames, MP4).
+* :mod:`mvtrack.sim.render` — ``render_frames``, ``write_video``: synthetic traffic video (BGR
+  uint8 frames, MP4); the look of each scene in :mod:`~mvtrack.sim.style` (``RenderStyle``),
+  its static picture in :mod:`~mvtrack.sim.backgrounds` (``render_background``), its objects in
+  :mod:`~mvtrack.sim.drawing`.
 """

@@ -3,7 +3,8 @@
 The functions take the stacked output rows of a run (:class:`TrackRows`, built once from the
 per-frame :class:`~mvtrack.types.TrackFrame` objects) and return matplotlib Figures; the
 caller saves them (atomically, :func:`save_figure`). Matplotlib is used with the Agg backend
-through its object API (no global pyplot state).
+through its object API (no global pyplot state). The colours are in :mod:`mvtrack.viz.colors`
+and the placement of labels in :mod:`mvtrack.viz.labels` (both names also importable from here).
 """
 
 from __future__ import annotations
@@ -17,6 +18,31 @@ from numpy.typing import NDArray
 
 from mvtrack.io.atomic import atomic_path
 from mvtrack.types import TrackFrame, TrackState
+from mvtrack.viz.colors import (
+    FAILURE_COLOR,
+    PALETTE,
+    TRUTH_COLOR,
+    contrast_ratio,
+    halo,
+    relative_luminance,
+)
+from mvtrack.viz.labels import place_labels
+
+__all__ = [
+    "FAILURE_COLOR",
+    "PALETTE",
+    "TRUTH_COLOR",
+    "TrackRows",
+    "contrast_ratio",
+    "grouped_bars",
+    "halo",
+    "place_labels",
+    "relative_luminance",
+    "save_figure",
+    "track_length_figure",
+    "tracks_per_frame_figure",
+    "trajectory_figure",
+]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -78,122 +104,6 @@ def _figure(width: float, height: float):
     return fig
 
 
-#: Dark, distinct qualitative colours (ColorBrewer's diverging schemes' dark ends): each has a
-#: WCAG contrast of at least 3:1 against the light grey of a scene drawn by
-#: :func:`trajectory_figure` (grey level ≥ 200 for a road of grey 96 or brighter).
-PALETTE = (
-    "#2166AC",  # blue
-    "#B2182B",  # red
-    "#1B7837",  # green
-    "#762A83",  # purple
-    "#8C510A",  # brown
-    "#01665E",  # teal
-    "#C51B7D",  # magenta
-    "#6B6B00",  # olive
-    "#08306B",  # navy
-    "#A63603",  # dark orange
-)
-#: Colour of tracks and bars that stand for a failure or for nothing (spurious tracks).
-FAILURE_COLOR = "#595959"
-#: Colour of the ground truth drawn beside the estimates.
-TRUTH_COLOR = "#000000"
-
-
-def relative_luminance(color: object) -> float:
-    """WCAG 2.x relative luminance of a colour (any matplotlib colour specification)."""
-    from matplotlib.colors import to_rgb
-
-    c = np.asarray(to_rgb(color))
-    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-    return float(lin @ [0.2126, 0.7152, 0.0722])
-
-
-def contrast_ratio(a: object, b: object) -> float:
-    """WCAG contrast ratio (1 … 21) of two colours."""
-    la, lb = sorted((relative_luminance(a), relative_luminance(b)), reverse=True)
-    return (la + 0.05) / (lb + 0.05)
-
-
-def halo(width: float = 3.0, color: str = "white") -> list:
-    """Path effects that draw a line or text over a wider ``color`` stroke: readable on any
-    background."""
-    from matplotlib import patheffects
-
-    return [patheffects.withStroke(linewidth=width, foreground=color)]
-
-
-def place_labels(
-    ax,
-    anchors: FloatArray,
-    texts: list[str],
-    colors: list[object] | None = None,
-    fontsize: float = 7.0,
-    max_radius: float = 48.0,
-) -> list:
-    """Put one text per anchor (data coordinates) where it overlaps no other label.
-
-    Each label is tried at offsets of growing radius (points) in sixteen directions around its
-    anchor, the text extending away from the anchor, and placed at the first position whose
-    box lies inside the axes and clear of the labels placed before it; a label that finds no
-    place within ``max_radius`` points is left out. A label moved away from its anchor is joined
-    to it by a thin line.
-
-    Returns
-    -------
-    list of matplotlib.text.Annotation
-        The labels placed (fewer than ``texts`` when some found no room).
-    """
-    fig = ax.figure
-    renderer = fig.canvas.get_renderer()
-    # an axes with a fixed aspect (imshow) takes its final box only when drawn: place the
-    # labels in that box, not in the one before the aspect is applied
-    ax.apply_aspect()
-    inside = ax.get_window_extent(renderer)
-    px = fig.dpi / 72.0
-    colors = colors if colors is not None else ["black"] * len(texts)
-    angles = np.arange(16) * (np.pi / 8) + np.pi / 4
-    radii = np.arange(3.0, max_radius + 1e-9, 3.0)
-    offs = (radii[:, None, None] * np.stack([np.cos(angles), np.sin(angles)], -1)[None]).reshape(
-        -1, 2)  # (candidates, 2) in points, nearest first
-    taken = np.zeros((0, 4))  # x0, y0, x1, y1 of placed labels, display pixels
-    placed = []
-    anchors = np.asarray(anchors, float).reshape(-1, 2)
-    for xy, text, color in zip(anchors, texts, colors, strict=True):
-        probe = ax.text(0, 0, text, fontsize=fontsize)
-        ext = probe.get_window_extent(renderer)
-        probe.remove()
-        w, h = ext.width + 2.0, ext.height + 2.0
-        ax_xy = ax.transData.transform(xy)
-        d = offs * px
-        # the text extends away from its anchor: left/right/centre by the offset's direction
-        sx = np.sign(np.round(offs[:, 0] / np.maximum(np.abs(offs).max(axis=1), 1e-9), 1))
-        sy = np.sign(np.round(offs[:, 1] / np.maximum(np.abs(offs).max(axis=1), 1e-9), 1))
-        x0 = ax_xy[0] + d[:, 0] - w * (1 - sx) / 2
-        y0 = ax_xy[1] + d[:, 1] - h * (1 - sy) / 2
-        box = np.stack([x0, y0, x0 + w, y0 + h], axis=1)
-        ok = ((box[:, 0] >= inside.x0) & (box[:, 2] <= inside.x1) & (box[:, 1] >= inside.y0)
-              & (box[:, 3] <= inside.y1))
-        if taken.size:
-            hit = ((box[:, None, 0] < taken[None, :, 2]) & (box[:, None, 2] > taken[None, :, 0])
-                   & (box[:, None, 1] < taken[None, :, 3]) & (box[:, None, 3] > taken[None, :, 1]))
-            ok &= ~hit.any(axis=1)
-        if not ok.any():
-            continue
-        i = int(np.argmax(ok))
-        ha = {1.0: "left", -1.0: "right", 0.0: "center"}[float(sx[i])]
-        va = {1.0: "bottom", -1.0: "top", 0.0: "center"}[float(sy[i])]
-        far = radii[i // len(angles)] > 3.0
-        ann = ax.annotate(
-            text, xy, xytext=tuple(offs[i]), textcoords="offset points", fontsize=fontsize,
-            color=color, ha=ha, va=va, path_effects=halo(2.5), zorder=6,  # over the paths
-            arrowprops={"arrowstyle": "-", "color": color, "lw": 0.6, "shrinkA": 0,
-                        "shrinkB": 0} if far else None,
-        )
-        taken = np.vstack([taken, box[i]])
-        placed.append(ann)
-    return placed
-
-
 def trajectory_figure(
     rows: TrackRows,
     size: tuple[int, int],
@@ -211,7 +121,8 @@ def trajectory_figure(
     """Every track's path over the scene (image coordinates, y down), labelled with its ID.
 
     The scene is drawn in grey and every path over a white halo, so that each colour reads on
-    any background; labels are placed so that they do not overlap (:func:`place_labels`).
+    any background; labels are placed so that they do not overlap
+    (:func:`~mvtrack.viz.labels.place_labels`).
 
     Parameters
     ----------
@@ -232,7 +143,7 @@ def trajectory_figure(
         it are drawn in their ID's palette colour without a legend entry.
     group_colors : dict of str to colour, optional
         Colour of each group (default: the palette in the groups' natural order, e.g. V1, V2,
-        …, V10; :data:`FAILURE_COLOR` and a dotted line for ``failure_group``).
+        …, V10; :data:`~mvtrack.viz.colors.FAILURE_COLOR` and a dotted line for ``failure_group``).
     labels : bool
         Label each path's end with its track ID.
     legend_title : str, optional
@@ -332,7 +243,7 @@ def grouped_bars(
     errors : dict of str to list of (low, high), optional
         Interval per bar (e.g. a 95 % binomial interval), drawn as an error bar.
     colors, hatches : dict, optional
-        Per series (default colours: :data:`PALETTE` in order).
+        Per series (default colours: :data:`~mvtrack.viz.colors.PALETTE` in order).
     value_labels : bool
         Write each bar's value above it.
 
