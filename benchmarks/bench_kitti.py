@@ -5,7 +5,7 @@ video pipeline's settings for a 1224×370 video (pixel gates and measurement noi
 ``s = sqrt(W H / (320 · 240))``, no size gate), run offline by
 :func:`mvtrack.tracking.track_detections` (backfill and interpolation on). Designs whose
 front end takes the tracker's predicted boxes run a first online :class:`Tracker` beside it
-(:func:`mvtrack.detection.scene.detect_with_tracker`); the detections it produced are then
+(:func:`mvtrack.detection.feedback.detect_with_tracker`); the detections it produced are then
 tracked offline.
 
 Scoring as peerbench scores a results file: ground-truth rows whose "consider" flag is 0 are
@@ -40,7 +40,8 @@ from scipy.optimize import linear_sum_assignment
 
 from mvtrack.detection import MOG2, DisturbanceMap
 from mvtrack.detection.adaptive import GaussianBackground
-from mvtrack.detection.scene import SceneFrontEnd, detect_with_tracker, two_pass
+from mvtrack.detection.feedback import detect_with_tracker, two_pass
+from mvtrack.detection.scene_frontend import SceneFrontEnd
 from mvtrack.eval import evaluate, iou_matrix
 from mvtrack.io.mot import MotTable, read_tracks
 from mvtrack.tracking import Tracker, TrackerConfig, track_detections

@@ -1,7 +1,7 @@
 """Annotated frames of the default real-video front end, and its track statistics.
 
 Runs the scene front end offline (background from the clip's median, size prior from a first
-pass; :func:`mvtrack.detection.scene.two_pass`) with the default tracker as the video pipeline
+pass; :func:`mvtrack.detection.feedback.two_pass`) with the default tracker as the video pipeline
 sets it (:func:`bench_kitti.tracker_config`) on vtest.avi and KITTI-17, writes the chosen
 frames with each box, its track ID and its blob flag (plain / merged / split) and the learnt
 size prior drawn as a faint ruler (the expected height of a person standing at each of a few
@@ -25,7 +25,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_kitti import SEQ, VTEST, load_frames, tracker_config
-from mvtrack.detection.scene import SceneFrontEnd, detect_with_tracker
+from mvtrack.detection.feedback import detect_with_tracker
+from mvtrack.detection.scene_frontend import SceneFrontEnd
 from mvtrack.tracking import Tracker, track_detections
 
 VTEST_FRAMES = (157, 185, 212, 300)
@@ -79,7 +80,7 @@ def draw(frame: np.ndarray, rows: np.ndarray, flags: np.ndarray, dets: np.ndarra
 
 def run(name: str, frames: list[np.ndarray], fps: float, keep: tuple[int, ...], out: Path,
         ext: str) -> dict:
-    """Two passes as :func:`~mvtrack.detection.scene.two_pass`, recording the second's flags."""
+    """Two passes as :func:`~mvtrack.detection.feedback.two_pass`, recording the second's flags."""
     size = (frames[0].shape[1], frames[0].shape[0])
     first = SceneFrontEnd()
     first.bootstrap(frames)

@@ -14,8 +14,10 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack.detection.adaptive import GaussianBackground, shadow_mask, temporal_median
-from mvtrack.detection.scene import SceneFrontEnd, detect_with_tracker
+from mvtrack.detection.adaptive import GaussianBackground, temporal_median
+from mvtrack.detection.feedback import detect_with_tracker
+from mvtrack.detection.scene_frontend import SceneFrontEnd
+from mvtrack.detection.shadows import shadow_mask
 from mvtrack.detection.sizeprior import SizePrior
 from mvtrack.eval import iou_matrix
 from mvtrack.io.mot import read_tracks

@@ -15,7 +15,8 @@ from mvtrack.detection.adapters import (
     from_ultralytics,
     to_supervision,
 )
-from mvtrack.detection.adaptive import shadow_mask, temporal_median
+from mvtrack.detection.adaptive import temporal_median
+from mvtrack.detection.shadows import shadow_mask
 from mvtrack.detection.sizeprior import SizePrior, quantile_line, robust_line
 from mvtrack.detection.splitmerge import MERGED, PLAIN, SPLIT, split_merge
 from mvtrack.types import Detections

@@ -40,13 +40,15 @@ meanwhile.
 Shadows (Cucchiara et al.'s test, here in normalised chromaticity): a foreground pixel whose
 brightness ratio to the background lies in :math:`[r_{lo}, r_{hi}]` and whose chromaticity
 :math:`(b, g, r) / (b + g + r)` differs from the background's by less than
-:math:`\tau_c` (L1) is a shadow and is not foreground (:func:`shadow_mask`).
+:math:`\tau_c` (L1), or whose texture matches the background's, is a shadow and is not
+foreground (:func:`~mvtrack.detection.shadows.shadow_mask`).
 
 Ghosts — a background that holds an object which has since left — appear as foreground
 blobs whose outline has strong edges in the background and none in the frame
-(:func:`ghost_blobs`); they are reset to the frame at once. A scene that starts with objects
-in view is bootstrapped with the per-pixel temporal median of frames spread over the start
-(online) or over the whole clip (offline, two passes; :func:`temporal_median`).
+(:func:`~mvtrack.detection.ghosts.ghost_blobs`); they are reset to the frame at once. A scene
+that starts with objects in view is bootstrapped with the per-pixel temporal median of frames
+spread over the start (online) or over the whole clip (offline, two passes;
+:func:`temporal_median`).
 """
 
 from __future__ import annotations
@@ -57,6 +59,18 @@ from collections.abc import Iterable
 import cv2
 import numpy as np
 from numpy.typing import NDArray
+
+from mvtrack.detection.ghosts import ghost_blobs
+from mvtrack.detection.shadows import channel_max, channel_sum, shadow_mask
+
+__all__ = [
+    "GaussianBackground",
+    "channel_max",
+    "channel_sum",
+    "ghost_blobs",
+    "shadow_mask",
+    "temporal_median",
+]
 
 Image = NDArray[np.uint8]
 
@@ -88,150 +102,6 @@ def temporal_median(frames: Iterable[Image], max_frames: int = 64) -> Image:
         pick = np.linspace(0, len(stack) - 1, max_frames).round().astype(int)
         stack = [stack[i] for i in pick]
     return np.median(np.stack(stack), axis=0).round().astype(np.uint8)
-
-
-def shadow_mask(
-    frame: NDArray[np.float32],
-    mean: NDArray[np.float32],
-    candidates: Image,
-    ratio: tuple[float, float] = (0.1, 1.3),
-    chroma: float = 0.02,
-    texture: float = 0.8,
-    min_texture: float = 3.0,
-    radius: int = 2,
-    out: Image | None = None,
-) -> Image:
-    r"""Pixels of ``candidates`` that are shadows (or a change of exposure) on ``mean`` (0/255).
-
-    A cast shadow, or the camera's gain, scales the light a surface sends and keeps its
-    colour or its texture. With brightness :math:`L = b + g + r`, chromaticity
-    :math:`\chi = (b, g, r) / L` and :math:`\rho` the normalised cross-correlation of the grey
-    frame and background over a :math:`(2 r + 1)^2` window, a candidate is a shadow when
-
-    .. math::
-
-        r_{lo} \le L_I / L_\mu \le r_{hi} \;\wedge\;
-        \big(\|\chi_I - \chi_\mu\|_1 < \tau_c \;\vee\;
-        (\rho > \tau_\rho \wedge s_\mu > s_{\min})\big),
-
-    :math:`s_\mu` the background's local standard deviation (the texture test needs texture).
-    The chromaticity test is Cucchiara et al.'s; on sunlit scenes a shadow lit by the blue
-    sky changes colour and only the texture test finds it (on KITTI-17's bricks: 21 % of the
-    dark shadow pixels, against 11 % of the people's pixels lost; measured in
-    ``benchmarks/bench_kitti.py``'s research notes, docs/bench/kitti.md).
-
-    Parameters
-    ----------
-    frame, mean : (H, W, 3) float32
-        The frame and the background mean (BGR).
-    candidates : (H, W) uint8
-        Pixels to test (non-zero); others are never shadow.
-    ratio : (float, float)
-        :math:`[r_{lo}, r_{hi}]`, the brightness ratios a shadow or a change of gain may have.
-    chroma : float
-        :math:`\tau_c`, L1 distance of the chromaticities.
-    texture : float
-        :math:`\tau_\rho`; above 1 disables the texture test.
-    min_texture : float
-        :math:`s_{\min}`, grey levels.
-    radius : int
-        Half-side of the correlation window.
-    """
-    lo, hi = ratio
-    if out is None or out.shape != candidates.shape:
-        out = np.empty(candidates.shape, np.uint8)
-    out.fill(0)
-    x, y, w, h = cv2.boundingRect(candidates)  # the tests run on the candidates' rectangle
-    if w == 0 or h == 0:
-        return out
-    pad = radius if texture <= 1.0 else 0
-    x0, y0 = max(x - pad, 0), max(y - pad, 0)
-    x1, y1 = min(x + w + pad, candidates.shape[1]), min(y + h + pad, candidates.shape[0])
-    fr, mu = frame[y0:y1, x0:x1], mean[y0:y1, x0:x1]
-    li = channel_sum(fr) + 1.0
-    lm = channel_sum(mu) + 1.0
-    r = li / lm
-    dchi = channel_sum(cv2.absdiff(fr / li[..., None], mu / lm[..., None]))
-    same = dchi < chroma
-    if texture <= 1.0:
-        rho, s_mu = _correlation(li, lm, radius)
-        same |= (rho > texture) & (s_mu > 3.0 * min_texture)  # L sums 3 channels
-    shadow = (r >= lo) & (r <= hi) & same & (candidates[y0:y1, x0:x1] > 0)
-    np.multiply(shadow, np.uint8(255), out=out[y0:y1, x0:x1], casting="unsafe")
-    return out
-
-
-def channel_max(img: NDArray[np.float32]) -> NDArray[np.float32]:
-    """Largest of the three channels per pixel (elementwise: a NumPy reduction over a last
-    axis of length 3 is several times slower)."""
-    b, g, r = cv2.split(img)
-    return cv2.max(cv2.max(b, g), r)
-
-
-def channel_sum(img: NDArray[np.float32]) -> NDArray[np.float32]:
-    """Sum of the three channels per pixel."""
-    b, g, r = cv2.split(img)
-    return cv2.add(cv2.add(b, g), r)
-
-
-def _correlation(
-    a: NDArray[np.float32], b: NDArray[np.float32], radius: int
-) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-    """Windowed normalised cross-correlation of ``a`` and ``b``, and the local std of ``b``."""
-    k = (2 * radius + 1, 2 * radius + 1)
-    ea, eb = cv2.blur(a, k), cv2.blur(b, k)
-    cov = cv2.blur(a * b, k) - ea * eb
-    va = np.maximum(cv2.blur(a * a, k) - ea * ea, 0.0)
-    vb = np.maximum(cv2.blur(b * b, k) - eb * eb, 0.0)
-    return cov / np.sqrt(va * vb + 1e-3), np.sqrt(vb)
-
-
-def ghost_blobs(
-    labels: NDArray[np.int32],
-    n: int,
-    frame_grey: Image,
-    mean_grey: Image,
-    ratio: float = 2.0,
-) -> NDArray[np.bool_]:
-    """Which of the ``n - 1`` labelled blobs are ghosts (True), from the edges on their outline.
-
-    A real object's outline is an edge of the frame; a ghost's (the place an object of the
-    background has left) is an edge of the background and not of the frame. With ``E_I`` and
-    ``E_B`` the Sobel gradient magnitudes of the frame and the background, a blob is a ghost
-    when ``Σ E_B > ratio · Σ E_I`` over its outline (its pixels with a neighbour outside it).
-
-    Parameters
-    ----------
-    labels : (H, W) int32
-        Labels of ``cv2.connectedComponents`` (0 = background).
-    n : int
-        Number of labels, the background included.
-    frame_grey, mean_grey : (H, W) uint8
-        Grey frame and grey background.
-    ratio : float
-        Edge ratio above which a blob is a ghost.
-
-    Returns
-    -------
-    (n - 1,) bool
-        One flag per blob, labels 1 … n - 1.
-    """
-    if n <= 1:
-        return np.zeros(0, bool)
-    inside = (labels > 0).astype(np.uint8)
-    outline = inside - cv2.erode(inside, None)
-    lab = labels[outline > 0]
-    ei = _edges(frame_grey)[outline > 0]
-    eb = _edges(mean_grey)[outline > 0]
-    si = np.bincount(lab, ei, minlength=n)[1:]
-    sb = np.bincount(lab, eb, minlength=n)[1:]
-    return sb > ratio * si
-
-
-def _edges(grey: Image) -> NDArray[np.float32]:
-    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3)
-    return cv2.magnitude(gx, gy)
 
 
 class GaussianBackground:
@@ -271,12 +141,13 @@ class GaussianBackground:
     jitter : int, default 1
         :math:`j` of eq. (1); 0 compares each pixel with its own background only.
     shadows : bool, default True
-        Remove shadow pixels (:func:`shadow_mask`) from the foreground.
+        Remove shadow pixels (:func:`~mvtrack.detection.shadows.shadow_mask`) from the
+        foreground.
     shadow_ratio, shadow_chroma, shadow_texture
-        ``ratio``, ``chroma`` and ``texture`` of :func:`shadow_mask`.
+        ``ratio``, ``chroma`` and ``texture`` of :func:`~mvtrack.detection.shadows.shadow_mask`.
     ghost_every : int, default 10
-        Test the foreground blobs for ghosts (:func:`ghost_blobs`) every this many frames
-        (0 never); a ghost's pixels are reset to the frame.
+        Test the foreground blobs for ghosts (:func:`~mvtrack.detection.ghosts.ghost_blobs`)
+        every this many frames (0 never); a ghost's pixels are reset to the frame.
 
     Attributes
     ----------
