@@ -1,12 +1,15 @@
 """Normalised cross-correlation of a stored appearance, over its object's pixels only.
 
 :class:`Template` is one stored appearance (a grey patch, its object mask, the box centre
-inside it) with the terms of :func:`masked_ncc` computed once; the search over a window is
-:func:`masked_ncc` (with a mask) or OpenCV's ``TM_CCOEFF_NORMED`` (without), in
-:meth:`mvtrack.detection.template.TemplateBank.rescue`.
+inside it) with the terms of :func:`masked_ncc` computed once, cut from a frame by
+:func:`cut_template`; the search over a window is :func:`masked_ncc` (with a mask) or OpenCV's
+``TM_CCOEFF_NORMED`` (without), inside a circular gate by :func:`search_gate`, which
+:meth:`mvtrack.detection.template.TemplateBank.rescue` runs for each missed track.
 """
 
 from __future__ import annotations
+
+import math
 
 import cv2
 import numpy as np
@@ -96,3 +99,107 @@ def masked_ncc(
     num /= np.sqrt(var_i, out=var_i)
     num[flat] = np.nan
     return num
+
+
+def grey_region(frame: Image, x0: int, y0: int, x1: int, y1: int, smooth: float, pad: int) -> Image:
+    """Grey levels of ``frame[y0:y1, x0:x1]``, smoothed by a Gaussian of ``smooth`` px.
+
+    The blur is computed on the region widened by ``pad`` px (3σ), so the borders see their
+    real neighbours; ``pad = 0`` leaves the region unsmoothed.
+    """
+    if pad == 0:
+        return np.ascontiguousarray(grey(frame[y0:y1, x0:x1]))
+    height, width = frame.shape[:2]
+    a, b = max(x0 - pad, 0), max(y0 - pad, 0)
+    c, d = min(x1 + pad, width), min(y1 + pad, height)
+    g = cv2.GaussianBlur(grey(frame[b:d, a:c]), (0, 0), smooth)
+    return np.ascontiguousarray(g[y0 - b : y1 - b, x0 - a : x1 - a])
+
+
+def cut_template(
+    frame: Image,
+    mask: Image | None,
+    box: NDArray[np.float64],
+    tick: int,
+    *,
+    min_size: int,
+    min_pixels: int,
+    min_std: float,
+    smooth: float,
+    pad: int,
+) -> Template | None:
+    """The grey patch of ``frame`` under ``box`` ``(x, y, w, h)``, or None if unusable.
+
+    The box is clipped to the image; a patch narrower or lower than ``min_size``, with fewer
+    than ``min_pixels`` object pixels in ``mask`` (non-zero = object; None: the whole box), or
+    whose grey levels vary by less than ``min_std`` (standard deviation) is not kept.
+    ``smooth`` and ``pad`` as in :func:`grey_region`.
+    """
+    height, width = frame.shape[:2]
+    x, y, w, h = box
+    left = math.floor(x - (w - 1) / 2 + 0.5)
+    top = math.floor(y - (h - 1) / 2 + 0.5)
+    x0, y0 = max(left, 0), max(top, 0)
+    x1 = min(left + max(round(w), 1), width)
+    y1 = min(top + max(round(h), 1), height)
+    if x1 - x0 < min_size or y1 - y0 < min_size:
+        return None
+    patch = grey_region(frame, x0, y0, x1, y1, smooth, pad)
+    on = None
+    if mask is not None:
+        on = cv2.compare(mask[y0:y1, x0:x1], 0, cv2.CMP_GT)  # 255 on the object
+        if cv2.countNonZero(on) < min_pixels:
+            return None
+    mean, spread = (v[0, 0] for v in cv2.meanStdDev(patch, mask=on))
+    if spread < min_std:
+        return None
+    return Template(patch, on, (x - x0, y - y0), tick, float(mean))
+
+
+def search_gate(
+    frame: Image, t: Template, px: float, py: float, r: float, smooth: float, pad: int
+) -> tuple[float, float, float] | None:
+    r"""Best NCC of template ``t`` over the placements whose box centre is within ``r`` of
+    ``(px, py)``.
+
+    The NCC (``cv2.TM_CCOEFF_NORMED``, or :func:`masked_ncc` for a masked template) is
+    evaluated on the window of ``frame`` around the gate (grey, smoothed as in
+    :func:`grey_region`, clipped to the image), then maximised inside the circle.
+
+    Returns
+    -------
+    (best, x, y) or None
+        The best NCC and the box centre of its placement; None when the template placed on
+        ``(px, py)`` sticks out of the image (an object leaving the picture has not stopped),
+        or when the gate holds only flat placements.
+    """
+    height, width = frame.shape[:2]
+    ph, pw = t.patch.shape
+    ox, oy = t.offset
+    # top-left of the template when its box centre sits on the prediction
+    tx, ty = round(px - ox), round(py - oy)
+    if tx < 0 or ty < 0 or tx + pw > width or ty + ph > height:
+        return None  # predicted partly outside the image: leaving, not stopped
+    ri = math.floor(r)
+    r2 = r * r
+    x0, y0 = max(tx - ri, 0), max(ty - ri, 0)
+    x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
+    window = grey_region(frame, x0, y0, x1, y1, smooth, pad)
+    if t.mask is None:
+        ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
+    else:  # NCC over the object's pixels only
+        ncc = masked_ncc(window, t.tz, t.mf, t.var_t, t.n)
+    cv2.patchNaNs(ncc, -2.0)  # flat placements: no correlation
+    # centre of placement (row i, col c) is (x0 + c + ox, y0 + i + oy); circular gate
+    key = (*ncc.shape, x0 + ox - px, y0 + oy - py, r2)
+    if t.gate is not None and t.gate[0] == key:
+        inside = t.gate[1]
+    else:
+        cx = np.arange(ncc.shape[1]) + key[2]
+        cy = np.arange(ncc.shape[0]) + key[3]
+        inside = cv2.compare(np.add.outer(cy * cy, cx * cx), r2, cv2.CMP_LE)
+        t.gate = (key, inside)
+    _, best, _, (c, i) = cv2.minMaxLoc(ncc, inside)
+    if c < 0 or best < -1.0:  # nothing inside the gate, or only flat placements
+        return None
+    return best, x0 + c + ox, y0 + i + oy

@@ -19,6 +19,11 @@ identity of the track), and takes arrays in: it knows nothing of the tracker.
   ``rescue(uids, predicted_xy, wh) -> (found, xy)`` callback.
 * :meth:`TemplateBank.retain` / :meth:`TemplateBank.drop` forget deleted tracks.
 
+The per-track rows of last detected boxes are :class:`~mvtrack.detection.track_boxes.TrackBoxes`
+(which :class:`TemplateBank` extends); the cutting of a template and its NCC search inside the
+gate are :func:`~mvtrack.detection.ncc.cut_template` and
+:func:`~mvtrack.detection.ncc.search_gate`.
+
 The video package connects the bank to the tracker (:mod:`mvtrack.video.rescue`).
 
 Coordinates follow :mod:`mvtrack.detection.blobs`: pixel ``(col, row)`` has centre
@@ -31,11 +36,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mvtrack.detection.ncc import Template, grey, masked_ncc
+from mvtrack.detection.ncc import Template, cut_template, search_gate
+from mvtrack.detection.track_boxes import TrackBoxes
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -44,16 +49,7 @@ Image = NDArray[np.uint8]
 RescueFn = Callable[[IntArray, FloatArray, FloatArray], tuple[BoolArray, FloatArray]]
 
 
-def _member(a: IntArray, b: IntArray) -> BoolArray:
-    """``np.isin(a, b)`` for small integer arrays, without its generic overhead."""
-    if a.size == 0 or b.size == 0:
-        return np.zeros(a.size, bool)
-    b = np.sort(b)
-    pos = np.minimum(np.searchsorted(b, a), b.size - 1)
-    return b[pos] == a
-
-
-class TemplateBank:
+class TemplateBank(TrackBoxes):
     """Last appearances of tracks and their normalised cross-correlation search.
 
     Parameters
@@ -154,230 +150,28 @@ class TemplateBank:
         self._pad = math.ceil(3 * self.smooth) if self.smooth > 0 else 0
         self.clear()
 
-    # ------------------------------------------------------------------ bookkeeping (arrays)
-    # One row of ``_f`` (float64) per track, rows sorted by uid (``_u``), so that a frame's
-    # update is a search, a gather, a few column operations and a scatter, whatever the number
-    # of tracks. Both end with a sentinel row (uid = int64 max), so a search never runs off
-    # the end. Columns: the last full-size detected box (x, y, w, h); the last observed centre
-    # (a detection or a template match); the last detected centre; the reference box area
-    # (running maximum, decaying 1 % per detection); the first observed centre; the tick of
-    # the box (−1: none); the number of detections.
-    _BOX, _LAST, _LAST_DET, _AREA, _ORIGIN, _TICK, _HITS = (
-        slice(0, 4), slice(4, 6), slice(6, 8), 8, slice(9, 11), 11, 12
-    )
-    _NCOL = 13
-    _SENTINEL = np.iinfo(np.int64).max
-
     def clear(self) -> None:
         """Forget everything."""
-        self._u = np.array([self._SENTINEL], np.int64)
-        self._f = self._empty_rows(1)
+        super().clear()
         self._templates: dict[int, Template] = {}
-        self._tick = -1
-        self._frame: Image | None = None  # the frame of tick ``_tick``
-        self._mask: Image | None = None  # a copy of its foreground mask, if given
-        self._mask_buf: Image | None = None
 
-    def _empty_rows(self, n: int) -> FloatArray:
-        f = np.zeros((n, self._NCOL))
-        f[:, self._TICK] = -1.0
-        return f
-
-    @property
-    def uids(self) -> IntArray:
-        """(T,) int64: the tracks that have a recorded detection (sorted)."""
-        return self._u[:-1]
-
-    def __len__(self) -> int:
-        return int(self._u.size - 1)
-
-    def __contains__(self, uid: object) -> bool:
-        return isinstance(uid, (int, np.integer)) and bool(np.isin(uid, self.uids))
-
-    def _rows(self, uids: IntArray) -> tuple[IntArray, BoolArray]:
-        """Row of each of ``uids`` (the sentinel's if absent) and whether it is there."""
-        pos = np.searchsorted(self._u, uids)
-        return pos, self._u[pos] == uids
-
-    def observe(
-        self,
-        frame: Image,
-        uids: ArrayLike,
-        xy: ArrayLike,
-        wh: ArrayLike,
-        mask: Image | None = None,
-    ) -> None:
-        """Record this frame's detected boxes of tracks ``uids`` (their new last appearance).
-
-        Call once per frame, after the tracker's step, with the tracks that were associated
-        with a detection (``uids`` may be empty). The patches are cut lazily from this frame
-        when a track is first missed (:meth:`rescue`), so the cost here is a few array
-        operations, independent of the number of tracks.
-
-        Parameters
-        ----------
-        frame : (H, W, 3) or (H, W) uint8
-            The frame the boxes were detected in (kept by reference until the next call).
-        uids : (K,) int
-            Internal track identities.
-        xy, wh : (K, 2)
-            Centres and sizes of the detected boxes.
-        mask : (H, W) uint8, optional
-            The frame's foreground mask (non-zero = object; e.g. ``detector.mask``), copied.
-            With it a template holds only the object's own pixels and the search is a masked
-            NCC: the road around the vehicle is left out, so a patch whose object has left
-            cannot match the empty scene. Without it the whole box is the template.
-        """
-        uids = np.asarray(uids, np.int64).reshape(-1)
-        xy = np.asarray(xy, np.float64).reshape(-1, 2)
-        wh = np.asarray(wh, np.float64).reshape(-1, 2)
-        if not (uids.size == xy.shape[0] == wh.shape[0]):
-            raise ValueError(
-                f"observe: uids, xy and wh need one row per track, got {uids.size}, "
-                f"{xy.shape[0]}, {wh.shape[0]}"
-            )
-        if uids.size > 1:
-            s = np.sort(uids)
-            if (s[1:] == s[:-1]).any():
-                raise ValueError("observe: uids must be distinct")
-        if (uids == self._SENTINEL).any():
-            raise ValueError(f"observe: uid {self._SENTINEL} is reserved")
-        if mask is not None and mask.shape != frame.shape[:2]:
-            raise ValueError(f"observe: mask is {mask.shape}, the frame {frame.shape[:2]}")
-        self._record(frame, uids, xy, wh, mask)
-
-    def _record(
-        self, frame: Image, uids: IntArray, xy: FloatArray, wh: FloatArray, mask: Image | None
-    ) -> None:
-        """:meth:`observe` without the checks of its arguments (distinct uids, shapes)."""
-        pos, known = self._rows(uids)
-        if not known.all():  # new tracks: insert empty rows (kept sorted), then as known ones
-            new = ~known
-            f = self._empty_rows(int(new.sum()))
-            f[:, self._ORIGIN] = xy[new]
-            allu = np.concatenate([self._u, uids[new]])
-            order = np.argsort(allu, kind="stable")  # the sentinel stays last
-            self._u = allu[order]
-            self._f = np.concatenate([self._f, f])[order]
-            pos, _ = self._rows(uids)
-        f = self._f[pos]
-        area = wh[:, 0] * wh[:, 1]
-        full = area >= self.min_fill * f[:, self._AREA]
-        if full.all():  # the common case: every box is its track's new appearance
-            f[:, 0:8] = np.concatenate([xy, wh, xy, xy], axis=1)  # box, last (detected) centre
-            f[:, self._TICK] = self._tick + 1
-        else:
-            # a track whose detection just shrank keeps its last full appearance: cut it now
-            # from the kept frame, before that frame is replaced (a loop over these few only)
-            for r in pos[~full & (f[:, self._TICK] == self._tick)].tolist():
-                self._current(r)
-            f[full, 0:2] = xy[full]
-            f[full, 2:4] = wh[full]
-            f[:, self._LAST] = xy
-            f[:, self._LAST_DET] = xy
-            f[full, self._TICK] = self._tick + 1
-        np.maximum(area, 0.99 * f[:, self._AREA], out=f[:, self._AREA])
-        f[:, self._HITS] += 1.0
-        self._f[pos] = f
-        self._tick += 1
-        self._frame = frame
-        if mask is None:
-            self._mask = None
-        else:
-            if self._mask_buf is None or self._mask_buf.shape != mask.shape:
-                self._mask_buf = np.empty(mask.shape, np.uint8)
-            np.copyto(self._mask_buf, mask, casting="unsafe")
-            self._mask = self._mask_buf
-
-    def _eligible_rows(self, f: FloatArray) -> BoolArray:
-        """Last detection ≥ max(min_travel · box length, min_travel_px) from the first one, and
-        ≥ min_hits detections (compared squared: no square root)."""
-        d = f[:, self._LAST_DET] - f[:, self._ORIGIN]
-        need = np.maximum(self.min_travel * np.maximum(f[:, 2], f[:, 3]), self.min_travel_px)
-        return ((d * d).sum(axis=1) >= need * need) & (f[:, self._HITS] >= self.min_hits)
-
-    def _eligible_row(self, f: list[float]) -> bool:
-        """:meth:`_eligible_rows` of one row (a list), in plain float arithmetic."""
-        dx = f[6] - f[9]
-        dy = f[7] - f[10]
-        need = max(self.min_travel * max(f[2], f[3]), self.min_travel_px)
-        return dx * dx + dy * dy >= need * need and f[12] >= self.min_hits
-
-    @property
-    def eligible(self) -> BoolArray:
-        """Per track in :attr:`uids`: far enough from its first detection, often enough seen."""
-        return self._eligible_rows(self._f[:-1])
-
-    def boxes(self, uids: ArrayLike) -> FloatArray:
-        """(K, 4) ``(x, y, w, h)``: the box each track's template is (or will be) cut from,
-        its last full-size detected box; NaN for tracks the bank does not hold.
-
-        For a stopped vehicle this is where it stands: the blob of a vehicle fading into the
-        background breaks into fragments at its edges, whose centroids (the track's last
-        measurements) lie anywhere inside that box.
-        """
-        uids = np.asarray(uids, np.int64).reshape(-1)
-        pos, has = self._rows(uids)
-        out = self._f[pos, self._BOX].copy()
-        out[~has] = np.nan
-        return out
-
-    def retain(self, uids: ArrayLike) -> None:
-        """Keep only the tracks in ``uids`` (the live ones); forget deleted tracks."""
-        keep = _member(self.uids, np.asarray(uids, np.int64).reshape(-1))
-        if not keep.all():
-            self._keep(keep)
-
-    def drop(self, uids: ArrayLike) -> None:
-        """Forget the tracks in ``uids`` (e.g. deleted by the tracker)."""
-        gone = _member(self.uids, np.asarray(uids, np.int64).reshape(-1))
-        if gone.any():
-            self._keep(~gone)
-
-    def _keep(self, keep: BoolArray) -> None:
-        for u in self.uids[~keep].tolist():
+    def _forget(self, uids: list[int]) -> None:
+        for u in uids:
             self._templates.pop(u, None)
-        keep = np.append(keep, True)  # the sentinel
-        self._u = self._u[keep]
-        self._f = self._f[keep]
+
+    def _freeze(self, i: int) -> None:
+        self._current(i)
 
     # ------------------------------------------------------------------------- templates
     def _cut(self, i: int) -> Template | None:
         """Grey patch of track row ``i``'s last full-size detected box, from the kept frame."""
         if self._frame is None:
             return None
-        frame = self._frame
-        height, width = frame.shape[:2]
-        x, y, w, h = self._f[i, self._BOX]
-        left = math.floor(x - (w - 1) / 2 + 0.5)
-        top = math.floor(y - (h - 1) / 2 + 0.5)
-        x0, y0 = max(left, 0), max(top, 0)
-        x1 = min(left + max(round(w), 1), width)
-        y1 = min(top + max(round(h), 1), height)
-        if x1 - x0 < self.min_size or y1 - y0 < self.min_size:
-            return None
-        patch = self._grey(frame, x0, y0, x1, y1)
-        mask = None
-        if self._mask is not None:
-            mask = cv2.compare(self._mask[y0:y1, x0:x1], 0, cv2.CMP_GT)  # 255 on the object
-            if cv2.countNonZero(mask) < self.min_pixels:
-                return None
-        mean, spread = (v[0, 0] for v in cv2.meanStdDev(patch, mask=mask))
-        if spread < self.min_std:
-            return None
-        tick = int(self._f[i, self._TICK])
-        return Template(patch, mask, (x - x0, y - y0), tick, float(mean))
-
-    def _grey(self, frame: Image, x0: int, y0: int, x1: int, y1: int) -> Image:
-        """Grey levels of ``frame[y0:y1, x0:x1]``, smoothed by a Gaussian of ``smooth`` px
-        (computed on the region widened by 3σ, so the borders see their real neighbours)."""
-        if self._pad == 0:
-            return np.ascontiguousarray(grey(frame[y0:y1, x0:x1]))
-        height, width = frame.shape[:2]
-        a, b = max(x0 - self._pad, 0), max(y0 - self._pad, 0)
-        c, d = min(x1 + self._pad, width), min(y1 + self._pad, height)
-        g = cv2.GaussianBlur(grey(frame[b:d, a:c]), (0, 0), self.smooth)
-        return np.ascontiguousarray(g[y0 - b : y1 - b, x0 - a : x1 - a])
+        return cut_template(
+            self._frame, self._mask, self._f[i, self._BOX], int(self._f[i, self._TICK]),
+            min_size=self.min_size, min_pixels=self.min_pixels, min_std=self.min_std,
+            smooth=self.smooth, pad=self._pad,
+        )
 
     def template(self, uid: int) -> Image | None:
         """The grey patch held for ``uid`` (cut now if it is due), or ``None``."""
@@ -463,8 +257,6 @@ class TemplateBank:
             return found, out, score
         height, width = frame.shape[:2]
         pos, has = self._rows(uids)
-        ri = math.floor(r)
-        r2 = r * r
         rows = self._f[pos].tolist()
         p_list = pxy.tolist()
         max_drift2 = None if self.max_drift is None else self.max_drift**2
@@ -503,36 +295,14 @@ class TemplateBank:
             t = self._current(int(pos[j]))
             if t is None:
                 continue
-            ph, pw = t.patch.shape
-            ox, oy = t.offset
-            # top-left of the template when its box centre sits on the prediction
-            tx, ty = round(px - ox), round(py - oy)
-            if tx < 0 or ty < 0 or tx + pw > width or ty + ph > height:
-                continue  # predicted partly outside the image: leaving, not stopped
-            x0, y0 = max(tx - ri, 0), max(ty - ri, 0)
-            x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
-            window = self._grey(frame, x0, y0, x1, y1)
-            if t.mask is None:
-                ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
-            else:  # NCC over the object's pixels only
-                ncc = masked_ncc(window, t.tz, t.mf, t.var_t, t.n)
-            cv2.patchNaNs(ncc, -2.0)  # flat placements: no correlation
-            # centre of placement (row i, col c) is (x0 + c + ox, y0 + i + oy); circular gate
-            key = (*ncc.shape, x0 + ox - px, y0 + oy - py, r2)
-            if t.gate is not None and t.gate[0] == key:
-                inside = t.gate[1]
-            else:
-                cx = np.arange(ncc.shape[1]) + key[2]
-                cy = np.arange(ncc.shape[0]) + key[3]
-                inside = cv2.compare(np.add.outer(cy * cy, cx * cx), r2, cv2.CMP_LE)
-                t.gate = (key, inside)
-            _, best, _, (c, i) = cv2.minMaxLoc(ncc, inside)
-            if c < 0 or best < -1.0:  # nothing inside the gate, or only flat placements
+            res = search_gate(frame, t, px, py, r, self.smooth, self._pad)
+            if res is None:  # leaving the image, or only flat placements inside the gate
                 continue
+            best, mx, my = res
             score[j] = best
             if best >= self.min_score:
                 found[j] = True
-                out[j] = (x0 + c + ox, y0 + i + oy)
+                out[j] = (mx, my)
                 self._f[pos[j], self._LAST] = out[j]  # held: the match is its last place
         return found, out, score
 
