@@ -7,7 +7,7 @@ number of array operations per frame. Everything else goes through
 :mod:`mvtrack.association`. :func:`gate_pairs` mirrors
 :func:`mvtrack.association.gating.candidate_pairs` with the ``euclidean`` and ``mahalanobis``
 distances, :func:`optimal` :func:`mvtrack.association.assign.assign` with rule ``optimal`` and
-``unmatched_cost = 2 half_u``; ``tests/test_tracker_fastpath.py`` pins them equal. The
+``unmatched_cost = 2 half_u``; ``tests/association/test_discs.py`` pins them equal. The
 tracker's box-size scaling adds per-axis factors (an axis-aligned ellipse) that
 :mod:`mvtrack.association` does not have; that case is checked against a hand computation.
 

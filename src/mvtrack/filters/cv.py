@@ -8,8 +8,8 @@ columns instead of batched matrix products, which is what keeps the tracker's sm
 cost low. ``make_predictor("kalman-cv")`` and the tracker use this one implementation; the
 general per-axis filter (:class:`mvtrack.filters.predictors.PerAxisKalmanPredictor` on the
 same model, kernels :func:`mvtrack.filters.fast.kf_axis_predict` and
-:func:`~mvtrack.filters.fast.kf_axis_update`) is its oracle: ``tests/test_tracker_fastpath.py``
-pins the two equal to 1e-9, also with a measurement variance per track (the tracker's
+:func:`~mvtrack.filters.fast.kf_axis_update`) is its oracle: ``tests/filters/test_cv.py`` pins
+the two equal to 1e-9, also with a measurement variance per track (the tracker's
 box-size scaling, ``TrackerConfig.size_ref``).
 
 With ``P = [[a, b], [b, c]]`` per axis, frame interval Δt (1 frame in the tracker),

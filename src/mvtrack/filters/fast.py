@@ -20,7 +20,7 @@ The layout (packing, chunks) is :mod:`mvtrack.filters.layout`; the RLS kernel
 :func:`rls_step` is :mod:`mvtrack.filters.fast_rls` (both re-exported here).
 
 The kernels do not validate their input (the predictors do) and never modify their arguments.
-``tests/test_fast.py`` pins them equal to the generic functions.
+``tests/filters/test_fast.py`` pins them equal to the generic functions.
 """
 
 from __future__ import annotations
