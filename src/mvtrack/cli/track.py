@@ -57,7 +57,7 @@ def register(app: typer.Typer) -> None:
                 help="Stream: append the rows of the frames tracked to results.txt and "
                 "states.csv every SECONDS while the run goes on (whole lines, synced; the "
                 "files are valid at every moment and end as without --flush), with memory "
-                "flat on an endless stream; trajectories.png then draws the last 5 minutes.",
+                "flat on an endless stream; trajectories.png then draws the last 9000 frames.",
                 metavar="SECONDS",
             ),
         ] = None,
