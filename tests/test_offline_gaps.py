@@ -92,6 +92,7 @@ def test_track_log_stores_only_frames_with_rows_and_releases_them() -> None:
     assert len(log) == 15 and log.n_rows == 1
     assert len(log._frames) == 1  # empty frames in step are implied, not stored
     assert log[14].frame == 14 and len(log[14]) == 0 and log[-15] is row
+    assert [f.frame for f in log[3:15:5]] == [3, 8, 13] and log[:1] == [row]
     out = log.release()
     assert out == [row] and len(log) == 15 and log.n_rows == 0 and log.released == 15
     with pytest.raises(IndexError, match="released"):

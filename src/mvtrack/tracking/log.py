@@ -5,6 +5,7 @@ from __future__ import annotations
 import bisect
 import os
 from collections.abc import Iterator
+from typing import overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -125,8 +126,14 @@ class TrackLog:
             else:
                 yield self._empty(i)
 
-    def __getitem__(self, i: int) -> TrackFrame:
+    @overload
+    def __getitem__(self, i: int) -> TrackFrame: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[TrackFrame]: ...
+    def __getitem__(self, i: int | slice) -> TrackFrame | list[TrackFrame]:
         n = self._n
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(n))]
         if i < 0:
             i += n
         if not 0 <= i < n:
