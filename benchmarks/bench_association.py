@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from mvtrack.association import TrackView, assign, candidate_pairs
-from mvtrack.association.assign import _components
+from mvtrack.association.optimal import _components
 from mvtrack.types import Detections
 
 CASES = [  # (distance, distance parameters, assignment rule, optimal solver); default gates

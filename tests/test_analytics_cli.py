@@ -181,3 +181,101 @@ def test_x5_example_file_holds_the_x5_approaches() -> None:
     assert [a.name for a in doc.approaches] == [a.name for a in ref.approaches]
     for a, b in zip(doc.approaches, ref.approaches, strict=True):
         np.testing.assert_allclose(np.asarray(a.polygon), np.asarray(b.polygon))
+
+
+def test_track_draws_the_analytics_on_the_video_and_snapshot(tmp_path: Path) -> None:
+    """The count line is drawn (amber, the line's pixels) on the annotated frame and on every
+    frame of tracks.mp4."""
+    import cv2
+
+    from mvtrack.viz.scene import LINE_COLOR
+
+    n = 40
+    video = box_video(tmp_path / "box.avi", n=n)
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text(SCENE)
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--config", str(cfg),
+                 "--snapshot", "10"]) == 0
+    shot = cv2.imread(str(out / "frame00010.png"))
+    # the line x = 48, far from the box (rows 28-35) and from the labels at the top
+    assert (shot[50:60, 48] == LINE_COLOR).all(axis=1).sum() >= 8
+    assert (shot[50:60, 20] != LINE_COLOR).any(axis=1).all()  # not drawn elsewhere
+    cap = cv2.VideoCapture(str(out / "tracks.mp4"))
+    frames = 0
+    while True:
+        ok, img = cap.read()
+        if not ok:
+            break
+        frames += 1
+        # rows below the speed label (box foot y = 36, label baseline 14 px lower)
+        amber = np.abs(img[55:63, 47:50].astype(int) - LINE_COLOR).sum(axis=2) < 90
+        assert amber.any(axis=1).all(), f"frame {frames - 1}: no line drawn"
+    cap.release()
+    assert frames == n
+
+
+def _line_totals(counts: dict[str, np.ndarray]) -> dict[str, tuple[int, int]]:
+    out: dict[str, tuple[int, int]] = {}
+    line = counts["element"] == "line"
+    for name in np.unique(counts["name"][line]):
+        sel = line & (counts["name"] == name)
+        dirs = list(dict.fromkeys(counts["direction"][sel].tolist()))  # forward label first
+        out[str(name)] = tuple(int(counts["count"][sel & (counts["direction"] == d)].sum())
+                               for d in dirs)  # type: ignore[assignment]
+    return out
+
+
+def test_live_counts_end_at_the_totals_of_counts_csv() -> None:
+    """Tracks crossing a line both ways, one flickering over it, one too short to count, one
+    crossing before it has min_frames rows: the counts shown frame by frame are 0 before the
+    first crossing and at the last frame equal the totals that the analytics of the whole run
+    write (the rows fed to both are the same)."""
+    from mvtrack.analytics import analyse, settings_from_dict
+    from mvtrack.analytics.tracks import TrackPoints
+    from mvtrack.types import TrackFrame, TrackState
+    from mvtrack.viz.overlay import LiveAnalytics
+
+    scene = settings_from_dict({
+        "min_frames": 5,
+        "lines": {"mid": {"points": [[50, 0], [50, 100]], "hysteresis": 2}},
+        "zones": {"left": {"polygon": [[0, 0], [40, 0], [40, 100], [0, 100]]}},
+    })
+    n = 60
+    k = np.arange(n, dtype=float)
+    paths = {  # id -> (frames, x)
+        1: (np.arange(n), 10 + 1.5 * k),  # left to right
+        2: (np.arange(n), 95 - 1.2 * k),  # right to left
+        3: (np.arange(n), 50 + 1.8 * np.sin(k)),  # flickers inside the band
+        4: (np.arange(20, 24), np.array([45.0, 48, 52, 55])),  # crosses, 4 rows: too short
+        5: (np.arange(30, 45), 46 + 4.0 * np.arange(15)),  # crosses at its 3rd row
+    }
+    live = LiveAnalytics(scene, 10.0)
+    shown = []
+    rows_f, rows_id, rows_x = [], [], []
+    for f in range(n):
+        ids = [i for i, (fr, _) in paths.items() if f in fr]
+        xs = [paths[i][1][list(paths[i][0]).index(f)] for i in ids]
+        m = len(ids)
+        xy = np.column_stack([xs, np.full(m, 30.0 + 10 * np.arange(m))]) if m else np.zeros((0, 2))
+        tf = TrackFrame(f, np.array(ids, np.int64), np.full(m, int(TrackState.CONFIRMED)),
+                        np.zeros(m, np.int64), xy, xy, xy, np.full((m, 2), 8.0),
+                        np.zeros((m, 2)))
+        live.push(tf)
+        shown.append(live.counts()["mid"])
+        rows_f += [f] * m
+        rows_id += ids
+        rows_x += list(xy)
+    pts = TrackPoints.from_arrays(np.array(rows_f), np.array(rows_id), np.array(rows_x),
+                                  np.full((len(rows_f), 2), 8.0))
+    res = analyse(pts, scene, 10.0, n)
+    totals = _line_totals(res.counts)["mid"]
+    assert shown[-1] == totals
+    # a -> b points down the screen, so +x is "backward": tracks 1 and 5; track 2 forward;
+    # 3 never leaves the band, 4 has 4 rows
+    assert totals == (1, 2)
+    assert shown[0] == (0, 0)
+    assert shown.index((0, 1)) == 29  # track 1: x = 10 + 1.5 k > 52 from k = 29
+    assert shown[33] == (0, 1)  # track 5 crossed at frame 32, its 3rd row: held ...
+    assert shown[34] == (0, 2)  # ... until its 5th row, frame 34
+    assert shown.index((1, 2)) == 40  # track 2: x = 95 - 1.2 k < 48 from k = 40

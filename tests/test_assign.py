@@ -187,7 +187,7 @@ def test_components_match_scipy_including_long_chains(rounds: int, monkeypatch) 
     from scipy.sparse import coo_array
     from scipy.sparse.csgraph import connected_components
 
-    module = sys.modules["mvtrack.association.assign"]
+    module = sys.modules["mvtrack.association.optimal"]
     monkeypatch.setattr(module, "_PROPAGATION_ROUNDS", rounds)
     _components = module._components
 
@@ -234,7 +234,7 @@ def test_optimal_with_leaf_peeling_equals_reference_on_geometric_scenes(
     import sys
 
     monkeypatch.setattr(
-        sys.modules["mvtrack.association.assign"], "DENSE_FRAME_NODES", dense_frame_nodes
+        sys.modules["mvtrack.association.optimal"], "DENSE_FRAME_NODES", dense_frame_nodes
     )
     rng = np.random.default_rng(15)
     for _ in range(6):
@@ -264,7 +264,7 @@ def test_many_two_by_two_clusters_match_the_reference(u: float | None, monkeypat
     """Block-diagonal frame of 2 × 2 conflicts (the closed-form path), some with a pair cut."""
     import sys
 
-    module = sys.modules["mvtrack.association.assign"]
+    module = sys.modules["mvtrack.association.optimal"]
     rng = np.random.default_rng(16)
     k = 120
     c = np.full((2 * k, 2 * k), np.inf)

@@ -251,10 +251,12 @@ def test_changing_the_distance_resets_the_gate() -> None:
 
 def test_naming_the_presets_own_distance_changes_nothing() -> None:
     """``--distance euclidean`` (the default distance, named) keeps the default's 10 px gate."""
+    from mvtrack.association import resolve_gate
     from mvtrack.tracking import preset
     from mvtrack.video import build_tracker_config
 
     named = build_tracker_config(RunSettings(tracker={"distance": "euclidean"}), 30.0)
-    assert named == build_tracker_config(RunSettings(), 30.0) and named.gate == 100.0
+    assert named == build_tracker_config(RunSettings(), 30.0)
+    assert resolve_gate(named.distance, named.gate) == 100.0
     assert preset("default", fps=30.0, distance="euclidean") == preset("default", fps=30.0)
     assert preset("default", fps=30.0, distance="iou").gate is None  # another distance: its own

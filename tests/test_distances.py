@@ -202,7 +202,7 @@ def test_coupled_literal_has_no_spatial_bound() -> None:
 
 
 def test_default_gates() -> None:
-    assert default_gate("euclidean") == 400.0
+    assert default_gate("euclidean") == 100.0  # a 10 px circle, the tracker's default
     for name in ("uncoupled", "coupled", "coupled-literal", "mahalanobis"):
         assert default_gate(name) == 9.21
     assert default_gate("iou") == 0.7

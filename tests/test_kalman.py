@@ -182,3 +182,28 @@ def test_property_shapes_symmetry_pd_and_mask(n, m, N, seed, steps) -> None:
         np.testing.assert_array_equal(P, np.swapaxes(P, 1, 2))
         if N:
             assert np.linalg.eigvalsh(P).min() > 0
+
+
+def test_leading_batch_dimensions_equal_the_flat_batch() -> None:
+    """(N, K, n) states give exactly the rows of the flat (N·K, n) batch; gain and Joseph
+    form are the halves of update."""
+    rng = np.random.default_rng(3)
+    model = constant_acceleration(dt=1.0, q=0.05, r=4.0)
+    N, K, n = 4, 3, model.F.shape[0]
+    x = rng.normal(size=(N, K, n))
+    A = rng.normal(size=(N, K, n, n))
+    P = A @ np.swapaxes(A, -1, -2) + np.eye(n)
+    xp, Pp = kalman.predict(x, P, model.F, model.Q)
+    fx, fP = kalman.predict(x.reshape(-1, n), P.reshape(-1, n, n), model.F, model.Q)
+    assert np.array_equal(xp.reshape(-1, n), fx) and np.array_equal(Pp.reshape(-1, n, n), fP)
+    z = rng.normal(size=(N, K, 1))
+    mask = rng.random((N, K)) > 0.3
+    xu, Pu = kalman.update(xp, Pp, z, model.H, model.R, mask)
+    gx, gP = kalman.update(fx, fP, z.reshape(-1, 1), model.H, model.R, mask.ravel())
+    assert np.array_equal(xu.reshape(-1, n), gx) and np.array_equal(Pu.reshape(-1, n, n), gP)
+    K_gain = kalman.gain(Pp, model.H, model.R)
+    assert np.array_equal(
+        np.where(mask[..., None, None], kalman.joseph(Pp, K_gain, model.H, model.R), Pp), Pu
+    )
+    with pytest.raises(ValueError, match="mask"):
+        kalman.update(xp, Pp, z, model.H, model.R, mask.ravel())

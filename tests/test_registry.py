@@ -69,3 +69,90 @@ def test_help_texts_list_the_registered_names(capsys) -> None:
     assert f"{registry.one_of(registry.DETECTORS, registry.DEFAULT_DETECTOR)}." in text
     assert f"{registry.one_of(registry.ASSIGN_RULES)}." in text
     assert registry.one_of({"a": 1, "b": 2, "c": 3}, "b") == "a, b (default) or c"
+
+
+@pytest.mark.parametrize("name", list(registry.PREDICTORS))
+def test_every_registered_predictor_is_built_by_name_and_follows_a_target(name: str) -> None:
+    from mvtrack.filters.predictors import PREDICTORS, make_predictor
+
+    assert PREDICTORS == tuple(registry.PREDICTORS)
+    predictor = make_predictor(name)
+    assert isinstance(predictor, registry.load(registry.PREDICTORS[name]))
+    truth = np.array([[10.0, 20.0], [200.0, 50.0]]) + np.arange(12)[:, None, None] * [2.0, -1.0]
+    state = predictor.init(truth[0])
+    for k in range(1, 12):
+        state = predictor.predict(state)
+        state = predictor.update(state, truth[k], np.ones(2, dtype=bool))
+    # a target moving at 2 px/frame to the right and 1 px/frame up: after 11 updates every
+    # predictor places it within a pixel of the next position
+    ahead = predictor.position(predictor.predict(state))
+    np.testing.assert_allclose(ahead, truth[11] + [2.0, -1.0], atol=1.0)
+    with pytest.raises(ValueError, match="bad parameters for predictor"):
+        make_predictor(name, no_such_parameter=1.0)
+
+
+def test_the_distance_registry_is_the_one_table_of_default_gates() -> None:
+    from mvtrack.association import DISTANCES, default_gate, resolve_gate
+    from mvtrack.tracking import Tracker, preset
+
+    assert list(DISTANCES) == list(registry.DISTANCES)
+    assert registry.default_gate("euclidean") == 100.0  # a 10 px circle
+    assert registry.default_gate("iou") == 0.7
+    for name, choice in registry.DISTANCES.items():
+        assert DISTANCES[name].gate == default_gate(name) == choice.gate
+        assert resolve_gate(name) == choice.gate and resolve_gate(name, 2.5) == 2.5
+        # what track-detections runs for --distance NAME without --gate: the table's gate
+        config = preset("default", fps=30.0, distance=name)
+        assert resolve_gate(config.distance, config.gate) == choice.gate
+        assert Tracker(config).associator._gate == choice.gate
+    assert preset("default").gate is None  # the default preset takes the table's too
+    with pytest.raises(ValueError, match="choose one of: euclidean, uncoupled"):
+        registry.default_gate("cosine")
+
+
+def test_gate_help_gives_every_default_gate(capsys) -> None:
+    from mvtrack.cli._options import GATE_HELP
+
+    assert GATE_HELP == registry.gate_help()
+    for name, choice in registry.DISTANCES.items():
+        assert name in GATE_HELP and f"{choice.gate:g} ({choice.unit})" in GATE_HELP
+    assert "100 (px²)" in GATE_HELP and "'10px'" in GATE_HELP
+    assert main(["track-detections", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"{registry.one_of(registry.PREDICTORS)}." in text
+    assert f"{registry.one_of(registry.DISTANCES)}." in text
+
+
+def test_cli_refuses_unregistered_predictors_and_distances(tmp_path, capsys) -> None:
+    det = tmp_path / "d.txt"
+    det.write_text("1,-1,10,10,5,5,1,-1,-1,-1\n")
+    for option, value, names in (
+        ("--predictor", "kalman-xyz", registry.PREDICTORS),
+        ("--distance", "cosine", registry.DISTANCES),
+    ):
+        assert main(["track-detections", str(det), "--out", str(tmp_path), option, value]) == 2
+        err = capsys.readouterr().err
+        assert value in err and ", ".join(names) in err
+
+
+def test_naming_the_default_distance_gives_byte_identical_results(tmp_path) -> None:
+    """``--distance euclidean`` is the default distance named: the same gate, the same file."""
+    from mvtrack.io.mot import write_detections
+
+    rng = np.random.default_rng(4)
+    start = rng.uniform(0, 300, size=(12, 2))
+    vel = rng.normal(0, 3, size=(12, 2))
+    frames = []
+    for k in range(40):
+        xy = start + k * vel + rng.normal(0, 1.5, size=start.shape)
+        keep = np.flatnonzero(rng.random(len(xy)) > 0.1)
+        frames.append(Detections(k, xy[keep], np.full((keep.size, 2), 30.0),
+                                 score=rng.uniform(0.1, 1.0, keep.size)))
+    det = tmp_path / "d.txt"
+    write_detections(det, frames)
+    outs = []
+    for extra in ([], ["--distance", "euclidean"], ["--gate", "100"]):
+        out = tmp_path / f"o{len(outs)}"
+        assert main(["track-detections", str(det), "--out", str(out), *extra]) == 0
+        outs.append((out / "d.txt").read_bytes())
+    assert outs[0] == outs[1] == outs[2] and len(outs[0].splitlines()) > 100

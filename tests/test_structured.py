@@ -15,7 +15,6 @@ from mvtrack.filters.structured import (
     StructuredPredictor,
     inferred_measurements,
     init,
-    kf_update,
     predict,
     search_region,
     update,
@@ -136,7 +135,7 @@ def test_hidden_part_with_exact_relation_is_updated_as_if_measured(hidden: int) 
     alpha = np.zeros((1, 2))
     alpha[0, hidden] = 1.0
     out, terms = update(params, graph, s, z, alpha)
-    want_x, want_P = kf_update(
+    want_x, want_P = kalman.update(
         s.xc[:, hidden], s.Pc[:, hidden], truth[:, hidden], params.H, params.R_cell
     )
     np.testing.assert_allclose(out.xc[:, hidden], want_x, atol=1e-12)
@@ -171,7 +170,7 @@ def test_vanished_part_stays_finite_and_follows_its_neighbours() -> None:
             alpha[0, 2] = 1.0
         cx, cP = coast
         cx, cP = cx @ params.F.T, params.F @ cP @ params.F.T + params.Q
-        coast = kf_update(cx, cP, zk[:, 2], params.H, params.R_cell)
+        coast = kalman.update(cx, cP, zk[:, 2], params.H, params.R_cell)
         s, _ = skf.update(s, zk, alpha)
         assert np.all(np.isfinite(s.xc)) and np.all(np.isfinite(s.Pc))
         if gone:
@@ -408,7 +407,7 @@ def test_tracker_runs_with_the_structured_predictor() -> None:
 
 
 def test_update_order_matters_only_under_occlusion() -> None:
-    from mvtrack.filters.structured import kf_gain, relation_measurement
+    from mvtrack.filters.structured import relation_measurement
 
     graph = PartGraph.chain(3)
     z0 = np.array([[[0.0, 0.0], [0.0, 20.0], [0.0, 50.0]]])
@@ -429,7 +428,7 @@ def test_update_order_matters_only_under_occlusion() -> None:
     np.testing.assert_allclose(ta.relation_z, relation_measurement(graph, z, alpha, s.xc[..., :2]))
     np.testing.assert_allclose(tb.relation_z, relation_measurement(graph, z, alpha, b.xc[..., :2]))
     assert not np.allclose(ta.relation_z[0, 1], tb.relation_z[0, 1])
-    K = kf_gain(s.Pr, first.H, first.R_rel)
+    K = kalman.gain(s.Pr, first.H, first.R_rel)
     expect = s.xr[0, 1] + K[0, 1] @ (tb.relation_z[0, 1] - s.xr[0, 1, :2])
     np.testing.assert_allclose(b.xr[0, 1], expect)  # eq. (14) with that measurement
     with pytest.raises(ValueError, match="order"):

@@ -1,10 +1,14 @@
-"""The names a user may choose, one registry each: detection front ends and assignment rules.
+"""The names a user may choose, one registry each: detection front ends, predictors,
+distances (with their default gates) and assignment rules.
 
-Each registry maps a name to a :class:`Choice` (a one-line summary and, for the front ends,
-where the implementation lives). This module imports nothing heavy (no NumPy, OpenCV or
-SciPy), so the command line builds its help texts and checks its options here; the libraries
-look their implementations up by the same names (:func:`mvtrack.detection.make_detector`,
-:func:`mvtrack.association.assign`). A new front end or rule is added here, once.
+Each registry maps a name to a :class:`Choice` (a one-line summary and, where the owner does
+not dispatch by name itself, where the implementation lives). This module imports nothing
+heavy (no NumPy, OpenCV or SciPy), so the command line builds its help texts and checks its
+options here; the libraries look their implementations up by the same names
+(:func:`mvtrack.detection.make_detector`, :func:`mvtrack.filters.predictors.make_predictor`,
+:data:`mvtrack.association.DISTANCES`, :func:`mvtrack.association.assign`). A new front end,
+predictor, distance or rule is added here, once; a distance's default gate is set here and
+nowhere else (:func:`default_gate`).
 """
 
 from __future__ import annotations
@@ -59,6 +63,110 @@ DETECTORS: dict[str, Choice] = {
         "mvtrack.detection.scene:SceneDetector",
     ),
 }
+
+#: predictors (:func:`mvtrack.filters.predictors.make_predictor`)
+PREDICTORS: dict[str, Choice] = {
+    "kalman-ca": Choice(
+        "per-axis constant-acceleration Kalman filter (paper 1)",
+        "mvtrack.filters.axis_kalman:KalmanCAPredictor",
+    ),
+    "kalman-cv": Choice(
+        "per-axis constant-velocity Kalman filter in closed form",
+        "mvtrack.filters.cv:KalmanCVPredictor",
+    ),
+    "kalman-coupled": Choice(
+        "one 2-D Kalman filter per track (full position covariance, paper 2)",
+        "mvtrack.filters.coupled_kalman:CoupledKalmanPredictor",
+    ),
+    "rls": Choice(
+        "per-axis RLS adaptive transversal predictor (paper 1)",
+        "mvtrack.filters.rls_predictor:RLSPredictor",
+    ),
+    "structured": Choice(
+        "structured Kalman filter over the parts of a body (paper 3)",
+        "mvtrack.filters.structured:StructuredPredictor",
+    ),
+}
+
+
+@dataclass(frozen=True)
+class DistanceChoice(Choice):
+    """A registered distance and its default gate.
+
+    Attributes
+    ----------
+    gate : float
+        The gate applied when none is given: pairs whose distance value is ``<= gate`` pass.
+    unit : str
+        What the gate measures, for help texts.
+    """
+
+    gate: float = 0.0
+    unit: str = ""
+
+
+#: χ² quantile of 2 degrees of freedom at 99 %, the gate of the Mahalanobis-type distances
+CHI2_2DOF_99 = 9.21
+
+#: association distances (:data:`mvtrack.association.DISTANCES`) and their default gates; the
+#: Euclidean one, 100 px² (a 10 px circle), is the tracker's default (docs/bench/tracker.md)
+DISTANCES: dict[str, DistanceChoice] = {
+    "euclidean": DistanceChoice(
+        "squared centre distance (papers 1 and 2)", gate=100.0, unit="px²"
+    ),
+    "uncoupled": DistanceChoice(
+        "per-axis normalised squared distance, eq. (8) of paper 2", gate=CHI2_2DOF_99, unit="χ²"
+    ),
+    "coupled": DistanceChoice(
+        "x-y coupled region, eq. (10) of paper 2 as corrected", gate=CHI2_2DOF_99, unit="χ²"
+    ),
+    "coupled-literal": DistanceChoice(
+        "x-y coupled region, eq. (10) of paper 2 as printed", gate=CHI2_2DOF_99, unit="χ²"
+    ),
+    "mahalanobis": DistanceChoice(
+        "full-covariance Mahalanobis distance", gate=CHI2_2DOF_99, unit="χ²"
+    ),
+    "iou": DistanceChoice("box overlap, cost 1 − IoU", gate=0.7, unit="1 − IoU"),
+}
+
+
+def default_gate(name: str) -> float:
+    """The default gate of the distance ``name``, from :data:`DISTANCES`.
+
+    Parameters
+    ----------
+    name : str
+        A registered distance.
+
+    Returns
+    -------
+    float
+        Squared pixels for ``euclidean``, a χ² value for the Mahalanobis-type distances, a
+        cost 1 − IoU for ``iou``.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not a registered distance.
+    """
+    check("distance", name, DISTANCES)
+    return DISTANCES[name].gate
+
+
+def gate_help() -> str:
+    """Help text of the ``--gate`` option, with every distance's default gate."""
+    by_value: dict[tuple[float, str], list[str]] = {}
+    for name, d in DISTANCES.items():
+        by_value.setdefault((d.gate, d.unit), []).append(name)
+    defaults = "; ".join(
+        f"{'/'.join(names)} {gate:g} ({unit})" for (gate, unit), names in by_value.items()
+    )
+    radius = DISTANCES["euclidean"].gate ** 0.5
+    return (
+        f"Gate on the distance's value (euclidean: px², '{radius:g}px' for a radius). "
+        f"Defaults: {defaults}. Default: the preset's, else the distance's."
+    )
+
 
 #: assignment rules (:func:`mvtrack.association.assign`)
 ASSIGN_RULES: dict[str, Choice] = {

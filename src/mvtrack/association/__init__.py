@@ -2,7 +2,10 @@
 
 - :mod:`~mvtrack.association.distances` — :class:`TrackView` and the distances by name
   (:data:`DISTANCES`: ``euclidean``, ``uncoupled``, ``coupled``, ``coupled-literal``,
-  ``mahalanobis``, ``iou``) with their default gates.
+  ``mahalanobis``, ``iou``; names, help and default gates in :data:`mvtrack.registry.DISTANCES`)
+  and :func:`resolve_gate`, the one place a missing gate becomes the distance's default.
+- :mod:`~mvtrack.association.view` — :class:`TrackView`, what association knows of the tracks;
+  :mod:`~mvtrack.association.radius` — each distance's radius bound for spatial gating.
 - :mod:`~mvtrack.association.gating` — :func:`candidate_pairs`: spatially pre-gated pairs
   (the one spatial index, :func:`~mvtrack.association.gating.spatial_pairs`).
 - :mod:`~mvtrack.association.discs` — gating and the tiered optimal assignment for
@@ -22,6 +25,7 @@ from mvtrack.association.distances import (
     gate_radius,
     get_distance,
     pair_distance,
+    resolve_gate,
 )
 from mvtrack.association.explain import Explanation, explain
 from mvtrack.association.gating import candidate_pairs
@@ -41,4 +45,5 @@ __all__ = [
     "gate_radius",
     "get_distance",
     "pair_distance",
+    "resolve_gate",
 ]

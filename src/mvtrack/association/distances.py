@@ -1,4 +1,4 @@
-"""Track-to-detection distances of papers 1 and 2, and the registry of their default gates.
+"""Track-to-detection distances of papers 1 and 2, by name.
 
 Every distance is evaluated on *aligned pair index arrays*: track rows ``ti`` (P,) and detection
 rows ``dj`` (P,) give ``P`` values, so one code path serves the dense ``N × M`` case
@@ -11,7 +11,7 @@ Names (``DISTANCES``):
 =============== ===================================================== ==================
 name            definition                                            default gate
 =============== ===================================================== ==================
-euclidean       eq. (8) of paper 2 (paper 1's circular mask)          400 (20 px)
+euclidean       eq. (8) of paper 2 (paper 1's circular mask)          100 (10 px)
 uncoupled       eq. (9) of paper 2, per axis, weighted by P̄x, P̄y      9.21 (χ², 2 dof)
 coupled         SPEC §2.3: innovation rotated along the velocity      9.21
 coupled-literal eq. (10) of paper 2 exactly as printed (E2.3–E2.9)   9.21
@@ -19,9 +19,11 @@ mahalanobis     full innovation covariance S                          9.21
 iou             1 − IoU of the boxes                                  0.7
 =============== ===================================================== ==================
 
-Each entry also gives a per-track *radius bound*: the largest centre distance in pixels at which
-the gate can still pass, so gating can pre-filter pairs spatially (grid hash) before computing
-the exact values.
+The names, their help and their default gates are :data:`mvtrack.registry.DISTANCES` (the one
+table of default gates; :func:`resolve_gate` applies it). Each entry also gives a per-track
+*radius bound* (:mod:`mvtrack.association.radius`): the largest centre distance in pixels at
+which the gate can still pass, so gating can pre-filter pairs spatially (grid hash) before
+computing the exact values. :class:`TrackView` is :mod:`mvtrack.association.view`.
 """
 
 from __future__ import annotations
@@ -33,105 +35,34 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack import registry
+from mvtrack.association import radius
+from mvtrack.association.view import TrackView, det_arrays
+from mvtrack.registry import CHI2_2DOF_99
 from mvtrack.types import Detections
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
-#: χ² quantile, 2 degrees of freedom, 99 % (SPEC §2.3)
-CHI2_2DOF_99 = 9.21
-
-
-@dataclass(frozen=True)
-class TrackView:
-    """What association needs to know about ``N`` predicted tracks.
-
-    Attributes
-    ----------
-    xy : (N, 2) float64
-        Predicted positions (x̄, ȳ), the gate centres.
-    cov : (N, 2, 2) float64
-        Predicted position covariance P̄ (paper 2's P̄x, P̄y are its diagonal).
-    S : (N, 2, 2) float64
-        Innovation covariance S = H P̄ Hᵀ + R.
-    velocity : (N, 2) float64
-        Predicted velocity (v̄x, v̄y) in pixels per frame.
-    wh : (N, 2) float64
-        Box width and height in pixels (zeros for point targets).
-    """
-
-    xy: FloatArray
-    cov: FloatArray
-    S: FloatArray
-    velocity: FloatArray
-    wh: FloatArray
-
-    def __post_init__(self) -> None:
-        xy = np.asarray(self.xy, dtype=np.float64).reshape(-1, 2)
-        n = xy.shape[0]
-        shapes = {"cov": (n, 2, 2), "S": (n, 2, 2), "velocity": (n, 2), "wh": (n, 2)}
-        object.__setattr__(self, "xy", xy)
-        for name, shape in shapes.items():
-            arr = np.asarray(getattr(self, name), dtype=np.float64)
-            if arr.shape != shape:
-                raise ValueError(f"TrackView.{name} must have shape {shape}, got {arr.shape}")
-            object.__setattr__(self, name, arr)
-
-    def __len__(self) -> int:
-        return int(self.xy.shape[0])
-
-    @classmethod
-    def from_arrays(
-        cls,
-        xy: FloatArray,
-        *,
-        cov: FloatArray | float | None = None,
-        S: FloatArray | float | None = None,
-        velocity: FloatArray | None = None,
-        wh: FloatArray | None = None,
-    ) -> TrackView:
-        """Build a view, broadcasting scalars: ``cov=1.0`` means P̄ = I for every track.
-
-        Missing ``cov`` defaults to the identity, missing ``S`` to ``cov``, missing ``velocity``
-        and ``wh`` to zeros.
-        """
-        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-        n = xy.shape[0]
-
-        def _cov(value: Any, default: FloatArray) -> FloatArray:
-            if value is None:
-                return default
-            arr = np.asarray(value, dtype=np.float64)
-            if arr.ndim == 0:
-                return np.broadcast_to(arr * np.eye(2), (n, 2, 2)).copy()
-            return np.broadcast_to(arr, (n, 2, 2)).copy()
-
-        cov_a = _cov(cov, np.broadcast_to(np.eye(2), (n, 2, 2)).copy())
-        s_a = _cov(S, cov_a.copy())
-        vel = np.zeros((n, 2)) if velocity is None else np.broadcast_to(velocity, (n, 2))
-        box = np.zeros((n, 2)) if wh is None else np.broadcast_to(wh, (n, 2))
-        return cls(xy, cov_a, s_a, np.array(vel, dtype=np.float64), np.array(box, np.float64))
-
-    @classmethod
-    def from_predictor(cls, predictor: Any, state: Any, wh: FloatArray) -> TrackView:
-        """The view of predicted tracks from a :class:`mvtrack.filters.base.Predictor`."""
-        return cls(
-            predictor.position(state),
-            predictor.position_cov(state),
-            predictor.innovation_cov(state),
-            predictor.velocity(state),
-            wh,
-        )
-
-
-def det_arrays(dets: Detections | FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Centres (M, 2) and sizes (M, 2) of ``dets`` (a :class:`Detections` or an (M, 2) array)."""
-    if isinstance(dets, Detections):
-        return dets.xy, dets.wh
-    xy = np.asarray(dets, dtype=np.float64)
-    if xy.ndim != 2 or xy.shape[1] != 2:
-        raise ValueError(f"dets must be Detections or an (M, 2) array, got shape {xy.shape}")
-    return xy, np.zeros_like(xy)
+__all__ = [
+    "CHI2_2DOF_99",
+    "DISTANCES",
+    "Distance",
+    "TrackView",
+    "coupled",
+    "coupled_literal",
+    "default_gate",
+    "det_arrays",
+    "distance_matrix",
+    "euclidean",
+    "gate_radius",
+    "get_distance",
+    "iou_cost",
+    "mahalanobis",
+    "pair_distance",
+    "resolve_gate",
+    "uncoupled",
+]
 
 
 # --------------------------------------------------------------------------------------------
@@ -309,76 +240,6 @@ def iou_cost(
     return 1.0 - np.clip(iou, 0.0, 1.0)
 
 
-# --------------------------------------------------------------------------------------------
-# radius bounds: r(view, det_wh, gate, **params) -> (N,) largest centre distance that can pass
-
-
-def _lambda_max(m: FloatArray) -> FloatArray:
-    """Largest eigenvalue of symmetric 2×2 matrices (N, 2, 2), closed form."""
-    a, b, c = m[:, 0, 0], 0.5 * (m[:, 0, 1] + m[:, 1, 0]), m[:, 1, 1]
-    return 0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b * b)
-
-
-def _radius_euclidean(view: TrackView, det_wh: FloatArray, gate: float) -> FloatArray:
-    return np.full(len(view), np.sqrt(max(gate, 0.0)))
-
-
-def _radius_uncoupled(
-    view: TrackView, det_wh: FloatArray, gate: float, *, use_innovation: bool = False
-) -> FloatArray:
-    c = view.S if use_innovation else view.cov
-    vmax = np.maximum(c[:, 0, 0], c[:, 1, 1])
-    return np.sqrt(max(gate, 0.0) * vmax)
-
-
-def _radius_coupled(
-    view: TrackView,
-    det_wh: FloatArray,
-    gate: float,
-    *,
-    rho: float = 2.0,
-    min_speed: float = 0.5,
-    use_innovation: bool = False,
-) -> FloatArray:
-    c = view.S if use_innovation else view.cov
-    px, py = c[:, 0, 0], c[:, 1, 1]
-    moving = np.hypot(view.velocity[:, 0], view.velocity[:, 1]) >= min_speed
-    var_rot = max(rho * rho, 1.0) * 0.5 * (px + py)
-    return np.sqrt(max(gate, 0.0) * np.where(moving, var_rot, np.maximum(px, py)))
-
-
-def _radius_mahalanobis(
-    view: TrackView, det_wh: FloatArray, gate: float, *, use_innovation: bool = True
-) -> FloatArray:
-    m = view.S if use_innovation else view.cov
-    return np.sqrt(max(gate, 0.0) * _lambda_max(m))  # |Δ|² ≤ r² λmax(S)
-
-
-def _radius_iou(view: TrackView, det_wh: FloatArray, gate: float) -> FloatArray:
-    r"""Centre-distance bound for ``1 − IoU <= gate``, i.e. IoU >= τ = 1 − gate.
-
-    The union is at least either box, so the overlap width o_x satisfies
-    τ w_t h_t <= o_x h_t and τ w_d h_d <= o_x h_d, i.e. o_x >= τ max(w_t, w_d); with
-    o_x <= (w_t + w_d)/2 − |Δx| this bounds |Δx| by (w_t + w_d)/2 − τ w_t and by
-    w_t/2 + (1/2 − τ) w_d, taken at the extreme detection width; likewise for y.
-    """
-    if gate >= 1.0:  # every pair passes, even disjoint boxes
-        return np.full(len(view), np.inf)
-    tau = 1.0 - gate
-    if det_wh.shape[0] == 0:
-        return np.zeros(len(view))
-    wmax, wmin = det_wh.max(axis=0), det_wh.min(axis=0)
-    w_ext = wmax if tau <= 0.5 else wmin  # maximises (1/2 − τ) w_d
-    b1 = 0.5 * (view.wh + wmax) - tau * view.wh
-    b2 = 0.5 * view.wh + (0.5 - tau) * w_ext
-    b = np.clip(np.minimum(b1, b2), 0.0, None)  # (N, 2): bounds on |Δx|, |Δy|
-    return np.hypot(b[:, 0], b[:, 1])
-
-
-def _radius_unbounded(view: TrackView, det_wh: FloatArray, gate: float, **_: Any) -> FloatArray:
-    return np.full(len(view), np.inf)
-
-
 @dataclass(frozen=True)
 class Distance:
     """A registered distance.
@@ -405,25 +266,29 @@ class Distance:
     params: tuple[str, ...] = ()
 
 
+def _registered(
+    name: str,
+    pairs: Callable[..., FloatArray],
+    bound: Callable[..., FloatArray],
+    params: tuple[str, ...] = (),
+) -> Distance:
+    """The distance ``name`` of :data:`mvtrack.registry.DISTANCES`, with its default gate."""
+    return Distance(name, pairs, registry.default_gate(name), bound, params)
+
+
+#: the registered distances by name (names, help and default gates:
+#: :data:`mvtrack.registry.DISTANCES`)
 DISTANCES: dict[str, Distance] = {
     d.name: d
     for d in (
-        Distance("euclidean", euclidean, 400.0, _radius_euclidean),
-        Distance("uncoupled", uncoupled, CHI2_2DOF_99, _radius_uncoupled, ("use_innovation",)),
-        Distance(
-            "coupled",
-            coupled,
-            CHI2_2DOF_99,
-            _radius_coupled,
-            ("rho", "min_speed", "use_innovation"),
+        _registered("euclidean", euclidean, radius.euclidean),
+        _registered("uncoupled", uncoupled, radius.uncoupled, ("use_innovation",)),
+        _registered(
+            "coupled", coupled, radius.coupled, ("rho", "min_speed", "use_innovation")
         ),
-        Distance(
-            "coupled-literal", coupled_literal, CHI2_2DOF_99, _radius_unbounded, ("min_speed",)
-        ),
-        Distance(
-            "mahalanobis", mahalanobis, CHI2_2DOF_99, _radius_mahalanobis, ("use_innovation",)
-        ),
-        Distance("iou", iou_cost, 0.7, _radius_iou),
+        _registered("coupled-literal", coupled_literal, radius.unbounded, ("min_speed",)),
+        _registered("mahalanobis", mahalanobis, radius.mahalanobis, ("use_innovation",)),
+        _registered("iou", iou_cost, radius.iou),
     )
 }
 
@@ -440,8 +305,32 @@ def get_distance(name: str | Distance) -> Distance:
 
 
 def default_gate(name: str | Distance) -> float:
-    """Default gate of a distance (squared units; ``iou``: a cost ``1 − IoU``)."""
+    """Default gate of a distance (squared units; ``iou``: a cost ``1 − IoU``).
+
+    Registered distances take theirs from :data:`mvtrack.registry.DISTANCES`; a
+    :class:`Distance` object carries its own.
+    """
     return get_distance(name).gate
+
+
+def resolve_gate(distance: str | Distance, gate: float | None = None) -> float:
+    """The gate applied with ``distance``: ``gate`` if given, else the distance's default.
+
+    The one place where a missing gate becomes a number (the tracker, gating, explanations,
+    radius bounds and the video settings all call it).
+
+    Parameters
+    ----------
+    distance : str or Distance
+        A registered name or a :class:`Distance`.
+    gate : float or None
+        An explicit gate (squared units; ``iou``: a cost ``1 − IoU``), or None.
+
+    Returns
+    -------
+    float
+    """
+    return default_gate(distance) if gate is None else float(gate)
 
 
 def _check_params(dist: Distance, params: dict[str, Any]) -> None:
@@ -495,5 +384,5 @@ def gate_radius(
     dist = get_distance(name)
     _check_params(dist, params)
     _, det_wh = det_arrays(dets)
-    g = dist.gate if gate is None else float(gate)
+    g = resolve_gate(dist, gate)
     return np.asarray(dist.radius(view, det_wh, g, **params), dtype=np.float64)

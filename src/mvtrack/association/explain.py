@@ -21,6 +21,7 @@ from mvtrack.association.distances import (
     det_arrays,
     get_distance,
     pair_distance,
+    resolve_gate,
 )
 from mvtrack.association.gating import candidate_pairs
 from mvtrack.types import Detections
@@ -154,7 +155,7 @@ def explain(
     Explanation
     """
     dist = get_distance(distance)
-    g = dist.gate if gate is None else float(gate)
+    g = resolve_gate(dist, gate)
     n, m = len(view), det_arrays(dets)[0].shape[0]
     if assignment is None:
         ti, dj, cost = candidate_pairs(view, dets, dist, g, **params)

@@ -27,6 +27,7 @@ from mvtrack.association.distances import (
     gate_radius,
     get_distance,
     pair_distance,
+    resolve_gate,
 )
 from mvtrack.types import Detections
 
@@ -193,7 +194,7 @@ def candidate_pairs(
         Their distance values (NaN never passes).
     """
     dist = get_distance(distance)
-    g = dist.gate if gate is None else float(gate)
+    g = resolve_gate(dist, gate)
     det_xy, _ = det_arrays(dets)
     n, m = len(view), det_xy.shape[0]
     if method not in ("auto", "dense", "grid"):

@@ -12,26 +12,25 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from mvtrack.registry import ASSIGN_RULES, DEFAULT_DETECTOR, DETECTORS, one_of
+from mvtrack.registry import (
+    ASSIGN_RULES,
+    DEFAULT_DETECTOR,
+    DETECTORS,
+    DISTANCES,
+    PREDICTORS,
+    gate_help,
+    one_of,
+)
 
 if TYPE_CHECKING:
     from mvtrack.config import RunSettings
 
-GATE_HELP = (
-    "Gate on the squared distance: px² for euclidean (400 = a 20 px circle; '20px' is accepted "
-    "too), a χ² value for uncoupled/coupled/mahalanobis (9.21 = 99 %), 1 − IoU for iou. "
-    "Default: the preset's, else the distance's."
-)
+#: the --gate help, with every distance's default gate (from mvtrack.registry.DISTANCES)
+GATE_HELP = gate_help()
 
 Preset = Annotated[str | None, typer.Option(help="Tracker preset: default, paper1, paper2.")]
-Predictor = Annotated[
-    str | None,
-    typer.Option(help="kalman-ca, kalman-cv, kalman-coupled, rls or structured."),
-]
-Distance = Annotated[
-    str | None,
-    typer.Option(help="euclidean, uncoupled, coupled, coupled-literal, mahalanobis or iou."),
-]
+Predictor = Annotated[str | None, typer.Option(help=f"{one_of(PREDICTORS)}.")]
+Distance = Annotated[str | None, typer.Option(help=f"{one_of(DISTANCES)}.")]
 Assign = Annotated[str | None, typer.Option(help=f"{one_of(ASSIGN_RULES)}.")]
 Gate = Annotated[str | None, typer.Option(help=GATE_HELP)]
 DetectorName = Annotated[

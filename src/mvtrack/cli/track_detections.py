@@ -94,16 +94,14 @@ def register(app: typer.Typer) -> None:
         """
         from tqdm import tqdm
 
-        from mvtrack.association import DISTANCES
         from mvtrack.cli import _signals
-        from mvtrack.filters.predictors import PREDICTORS
         from mvtrack.io.mot import read_detections
-        from mvtrack.registry import ASSIGN_RULES
+        from mvtrack.registry import ASSIGN_RULES, DISTANCES, PREDICTORS
         from mvtrack.tracking import preset as make_preset
         from mvtrack.tracking import track_detections
         from mvtrack.tracking.offline import frames_with_detections
 
-        _check_choice("--predictor", predictor, [*PREDICTORS, "structured"])
+        _check_choice("--predictor", predictor, PREDICTORS)
         _check_choice("--distance", distance, DISTANCES)
         _check_choice("--assign", assign, ASSIGN_RULES)
         changes = {

@@ -12,8 +12,12 @@ special cases the predictors use, written so that NumPy runs long contiguous loo
   multiplications by one. The per-axis measurement ``H = [1, 0, …]`` selects the position,
   so the update is the rank-1 correction ``P − P h hᵀ P / S`` with the scalar ``S = P₀₀ + r``
   (algebraically eq. (5) of paper 1; ``P₀₀`` stays ``P₀₀ r / S > 0``).
-* **Chunks.** Large batches are processed in chunks of :data:`CHUNK` filters so the
-  temporaries stay in cache; the results are identical (every filter is independent).
+* **Chunks.** Large batches are processed in chunks of
+  :data:`~mvtrack.filters.layout.CHUNK` filters so the temporaries stay in cache; the results
+  are identical (every filter is independent).
+
+The layout (packing, chunks) is :mod:`mvtrack.filters.layout`; the RLS kernel
+:func:`rls_step` is :mod:`mvtrack.filters.fast_rls` (both re-exported here).
 
 The kernels do not validate their input (the predictors do) and never modify their arguments.
 ``tests/test_fast.py`` pins them equal to the generic functions.
@@ -21,11 +25,11 @@ The kernels do not validate their input (the predictors do) and never modify the
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from mvtrack.filters.base import BoolArray, FloatArray
+from mvtrack.filters.fast_rls import rls_step
+from mvtrack.filters.layout import CHUNK, chunked, finite, lincomb, pack, packed_index, unpack
 
 __all__ = [
     "CHUNK",
@@ -37,76 +41,6 @@ __all__ = [
     "rls_step",
     "unpack",
 ]
-
-#: filters per chunk (keeps about 20 temporaries of CHUNK doubles in the L2/L3 cache)
-CHUNK = 16384
-
-
-def packed_index(n: int) -> np.ndarray:
-    """``idx[i, j]``: row of component ``P_ij`` in the packed upper triangle (symmetric)."""
-    idx = np.zeros((n, n), dtype=np.intp)
-    k = 0
-    for i in range(n):
-        for j in range(i, n):
-            idx[i, j] = idx[j, i] = k
-            k += 1
-    return idx
-
-
-def pack(P: FloatArray) -> FloatArray:
-    """Full symmetric matrices ``(…, n, n)`` -> packed upper triangles ``(…, n(n+1)/2)``."""
-    n = P.shape[-1]
-    iu = np.triu_indices(n)
-    return P[..., iu[0], iu[1]]
-
-
-def unpack(p: FloatArray, n: int) -> FloatArray:
-    """Packed upper triangles ``(…, n(n+1)/2)`` -> full symmetric matrices ``(…, n, n)``."""
-    return p[..., packed_index(n)]
-
-
-def _chunked(fn: Callable[..., None], arrays: list[np.ndarray], B: int, n_scratch: int) -> None:
-    """Call ``fn(scratch, *slices)`` on column slices ``[s:s+CHUNK]`` of every array.
-
-    ``scratch`` is a list of ``n_scratch`` float vectors of the chunk's length, reused across
-    chunks (no allocation per chunk).
-    """
-    size = min(B, CHUNK)
-    buf = np.empty((n_scratch, size), dtype=arrays[0].dtype)
-    for s in range(0, B, CHUNK):
-        e = min(s + CHUNK, B)
-        scratch = [row[: e - s] for row in buf]
-        fn(scratch, *[a[..., s:e] for a in arrays])
-
-
-def _finite(a: np.ndarray) -> BoolArray:
-    """``np.isfinite`` for float arrays; all true for object arrays (counting numbers)."""
-    if a.dtype == object:
-        return np.ones(a.shape, dtype=bool)
-    return np.isfinite(a)
-
-
-def _lincomb(terms: list[tuple[float, FloatArray]], out: FloatArray, tmp: FloatArray) -> None:
-    """``out[:] = Σ c·a`` over ``terms`` (zero coefficients already dropped; none empty)."""
-    c0, a0 = terms[0]
-    rest = terms[1:]
-    if c0 == 1.0 and rest and rest[0][0] == 1.0:
-        np.add(a0, rest[0][1], out=out)
-        rest = rest[1:]
-    elif c0 == 1.0 and rest:
-        np.multiply(rest[0][1], rest[0][0], out=out)
-        out += a0
-        rest = rest[1:]
-    elif c0 == 1.0:
-        np.copyto(out, a0)
-    else:
-        np.multiply(a0, c0, out=out)
-    for c, a in rest:
-        if c == 1.0:
-            out += a
-        else:
-            np.multiply(a, c, out=tmp)
-            out += tmp
 
 
 def kf_axis_predict(
@@ -145,7 +79,7 @@ def kf_axis_predict(
                po: FloatArray) -> None:
         tmp, free = sc[0], iter(sc[1:])
         for i in range(n):  # eq. (6)
-            _lincomb([(F[i, k], xc[k]) for k in range(n) if F[i, k] != 0.0], xo[i], tmp)
+            lincomb([(F[i, k], xc[k]) for k in range(n) if F[i, k] != 0.0], xo[i], tmp)
         A: dict[tuple[int, int], FloatArray] = {}
         for i in range(n):
             for ll in need[i]:
@@ -154,15 +88,15 @@ def kf_axis_predict(
                     A[i, ll] = terms[0][1]
                 else:
                     A[i, ll] = next(free)
-                    _lincomb(terms, A[i, ll], tmp)
+                    lincomb(terms, A[i, ll], tmp)
         for i in range(n):  # eq. (7): P' = A Fᵀ + Q, upper triangle
             for j in range(i, n):
                 out = po[idx[i, j]]
-                _lincomb([(F[j, ll], A[i, ll]) for ll in range(n) if F[j, ll] != 0.0], out, tmp)
+                lincomb([(F[j, ll], A[i, ll]) for ll in range(n) if F[j, ll] != 0.0], out, tmp)
                 if Q[i, j] != 0.0:
                     out += Q[i, j]
 
-    _chunked(kernel, [x, p, x_out, p_out], B, n_tmp)
+    chunked(kernel, [x, p, x_out, p_out], B, n_tmp)
     return x_out, p_out
 
 
@@ -191,7 +125,7 @@ def kf_axis_update(
     idx = packed_index(n)
     x_out = np.empty_like(x)
     p_out = np.empty_like(p)
-    miss = ~(ok & _finite(z))  # a missing measurement never enters the arithmetic
+    miss = ~(ok & finite(z))  # a missing measurement never enters the arithmetic
 
     def kernel(sc: list[FloatArray], xi: FloatArray, pi: FloatArray, zc: FloatArray,
                mc: BoolArray, xo: FloatArray, po: FloatArray) -> None:
@@ -216,7 +150,7 @@ def kf_axis_update(
                 np.subtract(pi[idx[i, j]], out, out=out)
 
     any_miss = bool(miss.any())
-    _chunked(kernel, [x, p, z, miss, x_out, p_out], B, 2 + n)
+    chunked(kernel, [x, p, z, miss, x_out, p_out], B, 2 + n)
     return x_out, p_out
 
 
@@ -250,7 +184,7 @@ def kf_select_update(
     p_out = np.empty_like(p)
     miss = ~ok
     for a in range(m):
-        miss = miss | ~_finite(z[a])
+        miss = miss | ~finite(z[a])
 
     def kernel(sc: list[FloatArray], xi: FloatArray, pin: FloatArray, zc: FloatArray,
                mc: BoolArray, xo: FloatArray, po: FloatArray) -> None:
@@ -301,121 +235,5 @@ def kf_select_update(
                     np.multiply(K[i][a], HP[a][j], out=tmp)
                     po[idx[i, j]] -= tmp
 
-    _chunked(kernel, [x, p, z, miss, x_out, p_out], B, 7 + 2 * n + n * m)
+    chunked(kernel, [x, p, z, miss, x_out, p_out], B, 7 + 2 * n + n * m)
     return x_out, p_out
-
-
-def rls_step(
-    w: FloatArray,
-    p: FloatArray,
-    taps: FloatArray,
-    y: FloatArray,
-    lam: float,
-    ok: BoolArray,
-    trace_max: float,
-    c: float,
-    fill: FloatArray | None = None,
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Eqs. (12)–(15) of paper 1 for ``B`` predictors in component layout.
-
-    Same step as :func:`mvtrack.filters.rls.update` (guard and safety net included).
-
-    Parameters
-    ----------
-    w : ndarray (M, B)
-        Weights.
-    p : ndarray (M(M+1)/2, B)
-        Packed P.
-    taps : ndarray (M, B)
-        Delay line, newest first (ỹ_n of this step).
-    y : ndarray (B,)
-        Observations (ignored where ``ok`` is False).
-    lam, trace_max, c : float
-        Forgetting factor, bound on ``tr P``, ``P₀ = c I`` (for the safety-net reset).
-    ok : ndarray (B,) of bool
-        Predictors with an observation; the others keep ``w`` and ``P`` and shift their
-        prediction (or ``fill``) into the delay line.
-    fill : ndarray (B,), optional
-        What enters the delay line where ``ok`` is False; default the predictor's own
-        prediction ``ŵᵀỹ``.
-
-    Returns
-    -------
-    w, p, taps : the new state; alpha : ndarray (B,) the a-priori errors (0 where not ok).
-    """
-    M, B = w.shape
-    idx = packed_index(M)
-    w_out = np.empty_like(w)
-    p_out = np.empty_like(p)
-    taps_out = np.empty_like(taps)
-    alpha = np.empty(B, dtype=w.dtype)
-    y_in = np.asarray(y, dtype=w.dtype)
-    miss = ~(ok & _finite(y_in))
-    inv_lam = 1.0 / lam
-    fill_in = y_in if fill is None else np.asarray(fill, dtype=w.dtype)
-    use_fill = fill is not None
-    diag = [int(idx[i, i]) for i in range(M)]
-
-    def kernel(sc: list[FloatArray], wi: FloatArray, pin: FloatArray, u: FloatArray,
-               yc: FloatArray, mc: BoolArray, fc: FloatArray, wo: FloatArray, po: FloatArray,
-               to: FloatArray, al: FloatArray) -> None:
-        d, yh, tmp, tr, k_i = sc[0], sc[1], sc[2], sc[3], sc[4]
-        pi = sc[5 : 5 + M]
-        for i in range(M):  # π = P_{n−1} ỹ_n
-            np.multiply(pin[idx[i, 0]], u[0], out=pi[i])
-            for j in range(1, M):
-                np.multiply(pin[idx[i, j]], u[j], out=tmp)
-                pi[i] += tmp
-        np.multiply(u[0], pi[0], out=d)  # ỹᵀπ
-        np.multiply(wi[0], u[0], out=yh)  # ŵ_{n−1}ᵀ ỹ_n
-        for i in range(1, M):
-            np.multiply(u[i], pi[i], out=tmp)
-            d += tmp
-            np.multiply(wi[i], u[i], out=tmp)
-            yh += tmp
-        d += 1.0
-        np.divide(1.0, d, out=d)  # 1 / (1 + ỹᵀπ)
-        np.subtract(yc, yh, out=al)  # eq. (13), α = y − ŵᵀỹ
-        if any_miss:
-            np.copyto(d, 0.0, where=mc)  # zero gain without an observation
-            np.copyto(al, 0.0, where=mc)
-        for i in range(M):
-            np.multiply(pi[i], d, out=k_i)  # eq. (12), k_i = π_i / (1 + ỹᵀπ)
-            np.multiply(k_i, al, out=wo[i])
-            wo[i] += wi[i]  # eq. (14)
-            for j in range(i, M):  # eq. (15) bracket: P − k ỹᵀ P = P − k πᵀ
-                out = po[idx[i, j]]
-                np.multiply(k_i, pi[j], out=out)
-                np.subtract(pin[idx[i, j]], out, out=out)
-        np.copyto(tr, po[diag[0]])
-        for i in range(1, M):
-            tr += po[diag[i]]
-        # eq. (15): × λ⁻¹ where an observation arrived and the trace stays within the bound
-        if lam != 1.0:
-            tr *= inv_lam
-            np.less_equal(tr, trace_max, out=tmp, casting="unsafe")
-            if any_miss:
-                np.copyto(tmp, 0.0, where=mc)
-            tmp *= inv_lam - 1.0
-            tmp += 1.0
-            for row in po:
-                row *= tmp
-        # safety net: covariance reset to c I (see mvtrack.filters.rls)
-        np.copyto(tmp, po[diag[0]])
-        for i in range(1, M):
-            np.minimum(tmp, po[diag[i]], out=tmp)
-        if not (bool(np.all(tmp > 0.0)) and bool(np.all(_finite(tr)))):
-            bad = ~_finite(tr)
-            for i in range(M):
-                bad |= ~(po[diag[i]] > 0.0)
-            for i in range(M):
-                for j in range(i, M):
-                    po[idx[i, j], bad] = c if i == j else 0.0
-        np.copyto(to[0], yc)  # the observation shifts into the delay line ...
-        np.copyto(to[0], fc if use_fill else yh, where=mc)  # ... or fill / the prediction
-        for i in range(1, M):
-            np.copyto(to[i], u[i - 1])
-
-    any_miss = bool(miss.any())
-    _chunked(kernel, [w, p, taps, y_in, miss, fill_in, w_out, p_out, taps_out, alpha], B, 5 + M)
-    return w_out, p_out, taps_out, alpha

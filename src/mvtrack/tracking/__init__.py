@@ -1,8 +1,8 @@
 """The multi-target tracker: predict, gate, assign, update, life cycle.
 
 - :mod:`~mvtrack.tracking.config` — :class:`TrackerConfig` (physical units, converted with
-  ``fps``) and the presets :func:`paper1`, :func:`paper2`, :func:`default` (:data:`PRESETS`,
-  :func:`preset`).
+  ``fps``); :mod:`~mvtrack.tracking.presets` — the presets :func:`paper1`, :func:`paper2`,
+  :func:`default` (:data:`PRESETS`, :func:`preset`).
 - :mod:`~mvtrack.tracking.tracker` — :class:`Tracker` (``step(dets, rescue=None) ->
   TrackFrame``: predict, associate, update, life cycle, births).
 - :mod:`~mvtrack.tracking.offline` — :func:`track_detections`: a detection file, offline
@@ -18,9 +18,10 @@
 >>> from mvtrack.tracking import Tracker, TrackerConfig, track_detections
 """
 
-from mvtrack.tracking.config import PRESETS, TrackerConfig, default, paper1, paper2, preset
+from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.log import TrackLog
 from mvtrack.tracking.offline import track_detections
+from mvtrack.tracking.presets import PRESETS, default, paper1, paper2, preset
 from mvtrack.tracking.table import TrackTable
 from mvtrack.tracking.tracker import Tracker
 

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from mvtrack.association import discs, gating
 from mvtrack.association.assign import assign as assign_pairs
-from mvtrack.association.distances import TrackView, get_distance
+from mvtrack.association.distances import TrackView, get_distance, resolve_gate
 from mvtrack.association.gating import candidate_pairs
 from mvtrack.association.regions import SHAPE_PARAMS, GateRegions, axis_shapes, gate_shapes
 from mvtrack.filters.cv import KalmanCVPredictor
@@ -78,7 +78,7 @@ class Associator:
         self._assign_params = dict(config.assign_params)
         sg = config.second_gate
         self._gate2 = None if sg is None else float(sg) ** 2
-        self._gate = self._distance.gate if config.gate is None else float(config.gate)
+        self._gate = resolve_gate(self._distance, config.gate)
         # scaling of the detection-related pixel values with the box size (config.size_ref)
         ref = config.size_ref
         self.ref = None if ref is None else float(ref)

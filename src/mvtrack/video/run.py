@@ -163,6 +163,13 @@ def track_to_folder(
             stack.callback(writer.release)  # runs before atomic_path renames the file
             paths["video"] = dest
         trails = TrailBuffer(settings.trail)
+        live = None  # lines, zones, running counts and speeds drawn on the video
+        if settings.analytics is not None and (writer is not None or snapshot is not None):
+            from mvtrack.analytics import settings_from_dict
+            from mvtrack.viz.overlay import LiveAnalytics
+
+            scene = settings_from_dict(settings.analytics, "[analytics]")
+            live = LiveAnalytics(scene, scene.fps or fps)
 
         def on_frame(k: int, image: Image, dets: Detections, tracks: TrackFrame) -> None:
             if stream is None:
@@ -175,6 +182,8 @@ def track_to_folder(
             if writer is None and snapshot is None:
                 return
             trails.push(tracks)
+            if live is not None:
+                live.push(tracks)
             if writer is None and not shot:
                 return
             gates: dict[str, Any] = {}
@@ -185,6 +194,8 @@ def track_to_folder(
                          "outer_cov": g.second_shape, "outer_r2": g.second_r2}
             text = [f"frame {k}  tracks {len(tracks)}", label]
             img = annotate_frame(image, tracks, trails=trails, text=text, **gates)
+            if live is not None:
+                live.draw(img)
             if writer is not None:
                 writer.write(img)
             if shot:

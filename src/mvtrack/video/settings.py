@@ -65,6 +65,7 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
 
 def _scaled_pixel_fields(tracker: dict[str, Any], s2: float) -> dict[str, Any]:
     """Pixel-valued defaults of ``TrackerConfig`` scaled to an image ``s²`` times 320×240."""
+    from mvtrack.association import resolve_gate
     from mvtrack.tracking import TrackerConfig
 
     defaults = {f.name: f.default for f in dataclasses.fields(TrackerConfig)}
@@ -73,6 +74,7 @@ def _scaled_pixel_fields(tracker: dict[str, Any], s2: float) -> dict[str, Any]:
     power = {"second_gate": 0.5, "recover_margin": 0.5, "size_ref": 0.5}
     if tracker.get("distance", defaults.get("distance")) == "euclidean":
         power["gate"] = 1.0  # px², scales with the area
+        defaults["gate"] = resolve_gate("euclidean", defaults["gate"])
     out = {}
     for name, p in power.items():
         value = defaults.get(name)
