@@ -53,9 +53,6 @@ def test_eval_of_a_file_whose_last_frame_is_a_million(files, tmp_path) -> None:
     assert seconds < LIMIT_S and mb < LIMIT_MB, (seconds, mb)
 
 
-@pytest.mark.xfail(strict=True, reason="track-detections steps the tracker and keeps a log "
-                   "entry for every frame up to the last one (about 100 s and 1.8 GB for "
-                   "frame 10⁶); the readers are bounded, the tracking loop is not yet")
 def test_track_detections_of_a_file_whose_last_frame_is_a_million(files, tmp_path) -> None:
     status, seconds, mb, err = _run(
         ["track-detections", str(files["det"]), "--out", str(tmp_path / "out")], 3 * LIMIT_S,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -50,6 +51,16 @@ def register(app: typer.Typer) -> None:
             int | None,
             typer.Option(help="Also save the annotated frame N (0-based) as frameNNNNN.png."),
         ] = None,
+        flush: Annotated[
+            float | None,
+            typer.Option(
+                help="Stream: append the rows of the frames tracked to results.txt and "
+                "states.csv every SECONDS while the run goes on (whole lines, synced; the "
+                "files are valid at every moment and end as without --flush), with memory "
+                "flat on an endless stream; trajectories.png then draws the last 9000 frames.",
+                metavar="SECONDS",
+            ),
+        ] = None,
     ) -> None:
         """Track the moving objects of VIDEO; write results.txt (MOTChallenge), tracks.mp4,
         trajectories.png, summary.json and states.csv (every row's state, its evidence and
@@ -58,7 +69,8 @@ def register(app: typer.Typer) -> None:
         speeds.csv and tracks.csv.
 
         Ctrl-C stops early and still writes what was tracked (exit status 130); so does
-        SIGTERM (exit status 143).
+        SIGTERM (exit status 143). With --flush SECONDS, results.txt and states.csv grow
+        while the run goes on (a camera or stream can be watched, and run forever).
         """
         from mvtrack.cli import _signals
         from mvtrack.errors import InputError
@@ -70,11 +82,14 @@ def register(app: typer.Typer) -> None:
             raise ValueError(f"--fps must be positive, got {fps}")
         if snapshot is not None and snapshot < 0:
             raise ValueError(f"--snapshot must be a frame index >= 0, got {snapshot}")
+        if flush is not None and not (math.isfinite(flush) and flush > 0):
+            raise ValueError(f"--flush must be a number of seconds > 0, got {flush:g}")
         settings = video_settings(
             config=config, preset=preset, predictor=predictor, gate=gate, distance=distance,
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
         )
-        run = track_video(video, out, settings, fps=fps, max_frames=max_frames, snapshot=snapshot)
+        run = track_video(video, out, settings, fps=fps, max_frames=max_frames, snapshot=snapshot,
+                          flush=flush)
         res, summary = run.result, run.summary
         typer.echo(
             f"{summary['frames']} frames, {summary['tracks']} tracks, "
@@ -82,7 +97,7 @@ def register(app: typer.Typer) -> None:
         )
         for path in run.paths.values():
             typer.echo(f"  {path}")
-        if run.log is not None:
+        if "states" not in run.paths:  # a streaming run wrote it as it went
             from mvtrack.analytics.outputs import states_table, write_table
 
             typer.echo(f"  {write_table(out / 'states.csv', states_table(run.log, res.flags))}")

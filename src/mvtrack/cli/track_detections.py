@@ -12,7 +12,10 @@ import typer
 from mvtrack.cli._options import Assign, Distance, Gate, Predictor, parse_gate
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
+
     from mvtrack.tracking import TrackerConfig
+    from mvtrack.types import Detections
 
 
 def results_name(detfile: Path) -> str:
@@ -85,6 +88,9 @@ def register(app: typer.Typer) -> None:
 
         Offline: a confirmed track is written from its first detection (--backfill) and the
         gaps it bridged are interpolated. Scores are ranked among those seen so far (auto).
+        These revise earlier rows, so the results file is written once, at the end (no
+        streaming, unlike mvtrack track --flush); a stretch of frames without detections is
+        jumped once every track has ended.
         """
         from tqdm import tqdm
 
@@ -93,6 +99,7 @@ def register(app: typer.Typer) -> None:
         from mvtrack.registry import ASSIGN_RULES, DISTANCES, PREDICTORS
         from mvtrack.tracking import preset as make_preset
         from mvtrack.tracking import track_detections
+        from mvtrack.tracking.offline import frames_with_detections
 
         _check_choice("--predictor", predictor, PREDICTORS)
         _check_choice("--distance", distance, DISTANCES)
@@ -115,10 +122,20 @@ def register(app: typer.Typer) -> None:
         config = make_preset(preset, fps=fps, **changes)
         frames = read_detections(detfile)
         t0 = time.perf_counter()
-        bar = tqdm(frames, desc="tracking", unit="frame", disable=not sys.stderr.isatty())
+        bar = tqdm(total=len(frames), desc="tracking", unit="frame",
+                   disable=not sys.stderr.isatty())
+
+        def progress(items: Iterator[Detections]) -> Iterator[Detections]:
+            upto = 0
+            for dets in items:  # only the frames with detections: a gap advances at once
+                bar.update(dets.frame + 1 - upto)
+                upto = dets.frame + 1
+                yield dets
+
         # Ctrl-C and SIGTERM end the run at a frame boundary; what was tracked is written
         with _signals.deferred() as stop:
-            log = track_detections(stop.until(bar), config)
+            log = track_detections(stop.until(progress(frames_with_detections(frames))),
+                                   config)
         bar.close()
         seconds = time.perf_counter() - t0
         dest = out / results_name(detfile)

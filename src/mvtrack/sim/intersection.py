@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from mvtrack.sim.paths import Path2D, place
+from mvtrack.sim.paths import Path2D, local_path, place
 from mvtrack.sim.scene import FloatArray, IntArray, Scene, assemble
 
 # ---------------------------------------------------------------------- X5
@@ -34,11 +34,6 @@ X5_COLORS = np.array(
     dtype=np.uint8,
 )
 _X5_MIN_GAP = 24.0  # minimum centre distance between any two vehicles at any frame
-
-
-def _rot(theta: float) -> FloatArray:
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[c, -s], [s, c]])
 
 
 def x5_path(approach: int, maneuver: str, size: tuple[int, int] = (320, 240)) -> Path2D:
@@ -77,14 +72,7 @@ def x5_path(approach: int, maneuver: str, size: tuple[int, int] = (320, 240)) ->
         ]
     else:
         raise ValueError(f"maneuver must be straight, left or right, got {maneuver!r}")
-    rot, c = _rot(theta), np.array(X5_CENTRE)
-    out: list[tuple[Any, ...]] = []
-    for sg in segs:
-        if sg[0] == "line":
-            out.append(("line", tuple(c + rot @ sg[1]), tuple(c + rot @ sg[2])))
-        else:
-            out.append(("arc", tuple(c + rot @ np.asarray(sg[1])), sg[2], sg[3] + theta, sg[4]))
-    return Path2D(tuple(out))
+    return local_path(segs, theta, X5_CENTRE)
 
 
 def _waiting_profile(

@@ -70,6 +70,25 @@ class Path2D:
         return xy, np.arctan2(np.sin(hd), np.cos(hd))
 
 
+def rotation(theta: float) -> FloatArray:
+    """The 2×2 rotation by ``theta`` (radians)."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+def local_path(segments: list[tuple[Any, ...]], theta: float, centre: Any) -> Path2D:
+    """A :class:`Path2D` from ``segments`` given in a local frame (travel along +x), turned
+    by ``theta`` and moved to ``centre``: an approach of an intersection."""
+    rot, c = rotation(theta), np.asarray(centre, np.float64)
+    out: list[tuple[Any, ...]] = []
+    for sg in segments:
+        if sg[0] == "line":
+            out.append(("line", tuple(c + rot @ sg[1]), tuple(c + rot @ sg[2])))
+        else:
+            out.append(("arc", tuple(c + rot @ np.asarray(sg[1])), sg[2], sg[3] + theta, sg[4]))
+    return Path2D(tuple(out))
+
+
 def place(
     path: Path2D, s: FloatArray
 ) -> tuple[FloatArray, FloatArray]:

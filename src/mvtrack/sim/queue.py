@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from mvtrack.sim.dense import scene_from_dense
 from mvtrack.sim.intersection import X5_COLORS
-from mvtrack.sim.paths import Path2D
+from mvtrack.sim.paths import Path2D, local_path
 from mvtrack.sim.scene import Scene
 
 FloatArray = NDArray[np.float64]
@@ -40,11 +40,6 @@ N_FRAMES = 1200
 METRES_PER_PIXEL = 0.25
 #: approach name of the direction of travel on entry (0 east, 1 south, 2 west, 3 north)
 ORIGIN_NAME = ("W", "N", "E", "S")
-
-
-def _rot(theta: float) -> FloatArray:
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[c, -s], [s, c]])
 
 
 def path(approach: int, maneuver: str) -> Path2D:
@@ -74,14 +69,7 @@ def path(approach: int, maneuver: str) -> Path2D:
                 ("line", (-HALF + r, HALF), (-HALF + r, d_cross))]
     else:
         raise ValueError(f"maneuver must be straight, left or right, got {maneuver!r}")
-    rot = _rot(theta)
-    out: list[tuple[Any, ...]] = []
-    for sg in segs:
-        if sg[0] == "line":
-            out.append(("line", tuple(c + rot @ sg[1]), tuple(c + rot @ sg[2])))
-        else:
-            out.append(("arc", tuple(c + rot @ np.asarray(sg[1])), sg[2], sg[3] + theta, sg[4]))
-    return Path2D(tuple(out))
+    return local_path(segs, theta, c)
 
 
 def _destination(approach: int, maneuver: str) -> str:

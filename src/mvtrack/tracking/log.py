@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import bisect
 import os
 from collections.abc import Iterator
+from typing import overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -53,30 +55,103 @@ class TrackLog:
     Frames are appended as they come; :meth:`columns` concatenates them once (cached) into
     one array per field with a leading ``frame`` column, so a log of a million rows costs
     a handful of arrays, not a million objects.
+
+    Only frames with rows are stored: an empty frame whose number follows the previous one's
+    costs nothing, and :meth:`skip` adds a whole gap of them at once (the offline run jumps
+    over the frames in which no track is alive). Indexing and iterating still see every frame,
+    ``log[i]`` being the ``i``-th frame appended (an empty :class:`TrackFrame` for the frames
+    not stored).
+
+    A streaming run hands the stored frames to its writer with :meth:`release`; the log then
+    keeps counting frames (``len``) but holds only those appended since, so its memory stays
+    flat on an endless stream. Released frames can no longer be indexed.
     """
 
     def __init__(self) -> None:
-        self._frames: list[TrackFrame] = []
+        self._frames: list[TrackFrame] = []  # the frames stored (with rows, or out of step)
+        self._pos: list[int] = []  # index of each stored frame among all frames appended
+        self._n = 0  # frames appended or skipped
+        self._first = 0  # frame number of the first frame appended
+        self._released = 0  # frames before this index were handed out by release()
         self._cache: dict[str, NDArray] | None = None
 
     def append(self, tf: TrackFrame) -> None:
         """Add one frame's rows."""
-        self._frames.append(tf)
+        if self._n == 0:
+            self._first = tf.frame
+        if len(tf) or tf.frame != self._first + self._n:  # an empty frame in step: implied
+            self._frames.append(tf)
+            self._pos.append(self._n)
+            self._cache = None
+        self._n += 1
+
+    def skip(self, count: int) -> None:
+        """Add ``count`` empty frames after the last one (numbered on from it), storing none."""
+        if count < 0:
+            raise ValueError(f"TrackLog.skip: count must be >= 0, got {count}")
+        if count and self._n == 0:
+            raise ValueError("TrackLog.skip: append the first frame before skipping")
+        self._n += count
+
+    def release(self) -> list[TrackFrame]:
+        """Hand out the stored frames (those with rows) and forget them.
+
+        ``len`` still counts every frame appended; indexing a released frame raises
+        ``IndexError``; :meth:`columns` and :meth:`to_mot` cover the frames appended since.
+        """
+        out = self._frames
+        self._frames, self._pos = [], []
+        self._released = self._n
         self._cache = None
+        return out
+
+    @property
+    def released(self) -> int:
+        """Frames handed out by :meth:`release` (the first index still held)."""
+        return self._released
 
     def __len__(self) -> int:
-        """Number of frames appended."""
-        return len(self._frames)
+        """Number of frames appended (empty and released ones included)."""
+        return self._n
+
+    def _empty(self, i: int) -> TrackFrame:
+        return TrackFrame.empty(self._first + i)
 
     def __iter__(self) -> Iterator[TrackFrame]:
-        return iter(self._frames)
+        j = 0
+        for i in range(self._released, self._n):
+            if j < len(self._pos) and self._pos[j] == i:
+                yield self._frames[j]
+                j += 1
+            else:
+                yield self._empty(i)
 
-    def __getitem__(self, i: int) -> TrackFrame:
-        return self._frames[i]
+    @overload
+    def __getitem__(self, i: int) -> TrackFrame: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[TrackFrame]: ...
+    def __getitem__(self, i: int | slice) -> TrackFrame | list[TrackFrame]:
+        n = self._n
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(n))]
+        if i < 0:
+            i += n
+        if not 0 <= i < n:
+            raise IndexError(f"TrackLog index {i} out of range ({n} frames)")
+        if i < self._released:
+            raise IndexError(f"TrackLog frame {i} was released (written by a streaming run)")
+        j = bisect.bisect_left(self._pos, i)
+        if j < len(self._pos) and self._pos[j] == i:
+            return self._frames[j]
+        return self._empty(i)
+
+    def frames_with_rows(self) -> list[TrackFrame]:
+        """The frames held that have rows, in order (a new list)."""
+        return [f for f in self._frames if len(f)]
 
     @property
     def n_rows(self) -> int:
-        """Total number of output rows over all frames."""
+        """Total number of output rows over the frames held."""
         return sum(len(f) for f in self._frames)
 
     def columns(self) -> dict[str, NDArray]:

@@ -1,11 +1,16 @@
 """Offline tracking of a detection file: :func:`track_detections` runs a fresh
 :class:`~mvtrack.tracking.tracker.Tracker` over all frames, then writes a confirmed track
 from its first detection (backfill), interpolates the gaps it bridged and drops the short
-tracks (:mod:`mvtrack.tracking.log`)."""
+tracks (:mod:`mvtrack.tracking.log`).
+
+These revise rows after the frame that produced them (a track's first rows get its ID only once
+it is confirmed, a gap only once it is bridged or the track ends, a track is dropped only once
+it ended short), so the offline run writes its results when the whole file is tracked; it does
+not stream."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -29,10 +34,15 @@ def track_detections(
     """Run a fresh :class:`Tracker` over ``frames`` (one :class:`Detections` per frame).
 
     Frames must come in increasing order; a frame index that skips ahead is filled with empty
-    frames so that the predictors advance one step per frame. With ``config.backfill`` (and
-    without ``output_tentative``) a confirmed track's rows start at its first detection
-    (:func:`mvtrack.tracking.log.backfill`); with ``config.interpolate`` the gaps a track
-    bridged are written in full, interpolated (:func:`mvtrack.tracking.log.interpolate_gaps`).
+    frames so that the predictors advance one step per frame, for as long as a track is
+    alive; the rest of a gap in which no track is left is jumped in one go (an empty frame
+    then changes nothing), and only frames with rows are kept, so a long empty stretch costs
+    neither time nor memory (:func:`frames_with_detections` gives a detection file's frames
+    that way). The log covers every frame from the first given to the last. With
+    ``config.backfill`` (and without ``output_tentative``) a confirmed track's rows start at
+    its first detection (:func:`mvtrack.tracking.log.backfill`); with ``config.interpolate``
+    the gaps a track bridged are written in full, interpolated
+    (:func:`mvtrack.tracking.log.interpolate_gaps`).
 
     The ``"auto"`` score scale is calibrated on the scores seen so far, as online (the same
     thresholds mean the same in both modes); ``scores`` (for example every score of the file)
@@ -50,20 +60,32 @@ def track_detections(
     tracker = Tracker(inner)
     if scores is not None:
         tracker.prime_scores(scores)
-    out: list[TrackFrame] = []
+    out: list[TrackFrame] = []  # the frames with rows only
     uids: list[IntArray] = []
-    last = None
+    first = last = None
+
+    def step(d: Detections) -> None:
+        tf = tracker.step(d, rescue)
+        if len(tf):
+            out.append(tf)
+            uids.append(tracker.row_uids)
+
     for dets in frames:
-        if last is not None:
+        if last is None:
+            first = dets.frame
+        else:
             if dets.frame <= last:
                 raise ValueError(
                     f"track_detections: frame {dets.frame} does not follow frame {last}"
                 )
-            for f in range(last + 1, dets.frame):
-                out.append(tracker.step(Detections.empty(f), rescue))
-                uids.append(tracker.row_uids)
-        out.append(tracker.step(dets, rescue))
-        uids.append(tracker.row_uids)
+            f = last + 1
+            # Empty frames while a track lives (it coasts, or is deleted); once none is
+            # left an empty frame changes nothing (the tracker compares its step numbers
+            # only with each other), so the rest of the gap is jumped.
+            while f < dets.frame and tracker.n_tracks:
+                step(Detections.empty(f))
+                f += 1
+        step(dets)
         last = dets.frame
     if late:
         out = backfill(out, uids)
@@ -72,6 +94,42 @@ def track_detections(
     if own and config.min_track_length is not None:  # whole tracks shorter than this go
         out = drop_short_tracks(out, _round_frames(config.min_track_length * config.fps))
     log = TrackLog()
+    if first is None:
+        return log
+    upto = first  # every frame from the first to the last given; the empty ones implied
     for tf in out:
+        if upto == first and tf.frame > first:
+            log.append(TrackFrame.empty(first))
+            upto += 1
+        log.skip(tf.frame - upto)
         log.append(tf)
+        upto = tf.frame + 1
+    if upto == first:
+        log.append(TrackFrame.empty(first))
+        upto += 1
+    log.skip(last + 1 - upto)
     return log
+
+
+def frames_with_detections(frames: Sequence[Detections]) -> Iterator[Detections]:
+    """The first frame of ``frames`` and then only those that hold detections.
+
+    What :func:`track_detections` needs to track ``frames``: the empty frames in between are
+    implied by the frame numbers, and a :class:`~mvtrack.io.mot.DetectionFrames` (a file
+    read by :func:`~mvtrack.io.mot.read_detections`) is visited through its index, so a file
+    whose last frame is 10⁶ costs its rows, not a million frames. The log of the run covers
+    every frame from the first to the last that holds detections.
+    """
+    if len(frames) == 0:
+        return
+    yield frames[0]
+    index = getattr(frames, "index", None)
+    if index is not None and hasattr(index, "groups"):
+        for f, _ in index.groups():
+            if f > 0:
+                yield frames[f]
+        return
+    for f in range(1, len(frames)):
+        d = frames[f]
+        if len(d):
+            yield d

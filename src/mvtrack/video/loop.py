@@ -109,7 +109,9 @@ def _with_frame(dets: Detections, k: int) -> Detections:
     return dets if dets.frame == k else dataclasses.replace(dets, frame=k)
 
 
-def _flags_of(detector: Any, n: int) -> NDArray[np.int8]:
+def flags_of(detector: Any, n: int) -> NDArray[np.int8]:
+    """The blob flag of each of the ``n`` detections the detector just gave (all plain when
+    it has no ``flags``)."""
     flags = getattr(detector, "flags", None)
     if flags is None or len(flags) != n:
         return np.zeros(n, np.int8)  # PLAIN
@@ -136,6 +138,7 @@ def run_frames(
     total: int | None = None,
     progress: bool | None = None,
     desc: str = "tracking",
+    keep: bool = True,
 ) -> PipelineResult:
     """Detect and track every frame of ``frames``.
 
@@ -159,6 +162,9 @@ def run_frames(
         Force the progress bar on or off (default: on when stderr is a terminal).
     desc : str
         Label of the progress bar.
+    keep : bool
+        Keep every frame's tracks and flags in the result (``False``: a streaming run, whose
+        ``on_frame`` writes them, keeps memory flat; ``tracks`` and ``flags`` stay empty).
 
     Returns
     -------
@@ -193,10 +199,12 @@ def run_frames(
             tracks = tracker.step(dets, rescue=rescue)
             if observe is not None:
                 observe(dets, tracks)
-            result.flags.append(_flags_of(detector, len(dets)))
+            if keep:
+                result.flags.append(flags_of(detector, len(dets)))
             if rescuer is not None:
                 rescuer.observe(image, dets, tracks)
-            result.tracks.append(tracks)
+            if keep:
+                result.tracks.append(tracks)
             result.n_frames = k + 1
             result.n_detections += len(dets)
             if on_frame is not None:

@@ -58,6 +58,7 @@ def track_to_folder(
     parts: tuple[Any, Any] | None = None,
     source_error: Callable[[], str | None] | None = None,
     snapshot: int | None = None,
+    flush: float | None = None,
 ) -> RunOutput:
     """Track ``frames`` and write everything into the folder ``out``.
 
@@ -77,6 +78,15 @@ def track_to_folder(
 
     Ctrl-C during the loop ends it early; the files are still written for the frames
     processed (``summary["interrupted"]``).
+
+    With ``flush`` (seconds) the run streams (:mod:`mvtrack.video.stream`): ``results.txt`` and
+    ``states.csv`` are created at once and every ``flush`` seconds get the rows of the frames
+    tracked since, whole lines synced to disk, so they can be read while the run goes on and
+    are valid at every moment; memory stays flat on an endless stream. At the end both files
+    hold exactly what a run without ``flush`` writes, and so do the summary's figures;
+    ``trajectories.png`` draws the last
+    :data:`~mvtrack.video.stream.TRAJECTORY_FRAMES` frames only, and the summary gains
+    ``flush_seconds``. ``tracks.mp4`` is still written whole at the end.
 
     Parameters
     ----------
@@ -106,11 +116,15 @@ def track_to_folder(
     snapshot : int, optional
         Also save the annotated frame with this index as ``frameNNNNN.png`` (lossless), with or
         without the video.
+    flush : float, optional
+        Stream ``results.txt`` and ``states.csv``, appending every ``flush`` seconds (> 0).
     """
     import cv2
 
     from mvtrack.io.atomic import atomic_path, write_json
     from mvtrack.tracking import TrackLog
+    from mvtrack.video.loop import flags_of
+    from mvtrack.video.stream import StreamingOutput
     from mvtrack.viz.annotate import TrailBuffer, annotate_frame
     from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
 
@@ -127,8 +141,18 @@ def track_to_folder(
     background: list[Image] = []
     config = tracker.config
     label = f"{config.predictor} | {config.distance} | {config.assign}"
+    stream = None
+    if flush is not None:  # both files exist (empty) before the first frame
+        frames_of = getattr(config, "frames", None)
+        stream = StreamingOutput(
+            out, flush, gap=frames_of().max_misses if frames_of is not None else None
+        )
+        log = stream.log
+        paths.update(stream.paths)
 
     with contextlib.ExitStack() as stack:
+        if stream is not None:
+            stack.callback(stream.close)  # what was tracked is written, whatever happens
         writer = None
         if settings.video:
             dest = out / "tracks.mp4"
@@ -148,7 +172,10 @@ def track_to_folder(
             live = LiveAnalytics(scene, scene.fps or fps)
 
         def on_frame(k: int, image: Image, dets: Detections, tracks: TrackFrame) -> None:
-            log.append(tracks)
+            if stream is None:
+                log.append(tracks)
+            else:
+                stream.add(tracks, flags_of(detector, len(dets)))
             if k == 0:
                 background.append(image.copy())
             shot = snapshot is not None and k == snapshot
@@ -180,19 +207,36 @@ def track_to_folder(
 
         result = run_frames(
             frames, detector, tracker, rescuer=rescuer, max_frames=max_frames,
-            on_frame=on_frame, total=total, progress=progress,
+            on_frame=on_frame, total=total, progress=progress, keep=stream is None,
         )
+        if stream is not None:
+            stream.close()
         if result.error is None and source_error is not None and not result.interrupted:
             result.error = source_error()
 
-    paths["results"] = out / "results.txt"
-    log.write_mot(paths["results"], include_coasting=False)
-    rows = TrackRows.from_frames(log)
-    lengths = _track_lengths(log)
+    if stream is None:
+        paths["results"] = out / "results.txt"
+        log.write_mot(paths["results"], include_coasting=False)
+        rows = TrackRows.from_frames(log.frames_with_rows())
+        lengths = _track_lengths(log)
+        n_tracks = len(lengths)
+        track_length = {
+            "median": float(np.median(lengths)) if lengths.size else 0.0,
+            "max": int(lengths.max()) if lengths.size else 0,
+        }
+        states = rows.state_histogram()
+        drawn = f"{n_tracks} tracks"
+    else:
+        rows = stream.recent.track_rows()
+        n_tracks, track_length = stream.stats.n_tracks, stream.stats.lengths()
+        states = stream.stats.state_histogram()
+        drawn = f"{n_tracks} tracks, the last {stream.recent.frames} frames drawn"
+        if result.n_frames <= stream.recent.frames:
+            drawn = f"{n_tracks} tracks"
     name = Path(source).name if source else "video"
     fig = trajectory_figure(
         rows, size, background[0] if background else None,
-        title=f"{name}: {len(lengths)} tracks ({label})",
+        title=f"{name}: {drawn} ({label})",
     )
     paths["trajectories"] = out / "trajectories.png"
     save_figure(fig, paths["trajectories"])
@@ -201,13 +245,10 @@ def track_to_folder(
         "frames": result.n_frames,
         "video_fps": fps,
         "size": list(size),
-        "tracks": len(lengths),
-        "track_length_frames": {
-            "median": float(np.median(lengths)) if lengths.size else 0.0,
-            "max": int(lengths.max()) if lengths.size else 0,
-        },
+        "tracks": n_tracks,
+        "track_length_frames": track_length,
         "detections": result.n_detections,
-        "states": rows.state_histogram(),
+        "states": states,
         "processing_speed": round(result.processing_speed, 2) if result.n_frames else None,
         "seconds": round(result.seconds, 3),
         "ended_early": result.ended_early,
@@ -217,6 +258,8 @@ def track_to_folder(
         "tracker": _config_dict(config),
         "files": {k: v.name for k, v in paths.items()},
     }
+    if stream is not None:
+        summary["flush_seconds"] = stream.interval
     paths["summary"] = out / "summary.json"
     summary["files"]["summary"] = "summary.json"
     write_json(paths["summary"], summary)
@@ -240,6 +283,7 @@ def track_video(
     max_frames: int | None = None,
     progress: bool | None = None,
     snapshot: int | None = None,
+    flush: float | None = None,
 ) -> RunOutput:
     """Open ``video``, build its parts for its size and frame rate, and :func:`track_to_folder`.
 
@@ -258,7 +302,7 @@ def track_video(
         (:func:`resolve_settings`).
     fps : float, optional
         Frame rate to assume instead of the source's.
-    max_frames, progress, snapshot
+    max_frames, progress, snapshot, flush
         As in :func:`track_to_folder`.
 
     Raises
@@ -276,4 +320,5 @@ def track_video(
             (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
             out=out, max_frames=max_frames, total=src.frame_count, source=str(video),
             progress=progress, parts=parts, source_error=lambda: src.error, snapshot=snapshot,
+            flush=flush,
         )
