@@ -143,3 +143,16 @@ def test_track_log_writes_results_atomically(tmp_path) -> None:
     assert table.frame.tolist() == [0, 1] and table.id.tolist() == [1, 1]
     np.testing.assert_allclose(table.tlwh[1], [17, 28, 10, 6])
     assert [p.name for p in dest.parent.iterdir()] == ["seq.txt"]
+
+
+def test_paper_presets_count_their_coasting_in_frames_at_any_frame_rate() -> None:
+    """Paper 1's "3 frames without a detection" is 3 frames at every frame rate, including
+    those where 3 / fps × fps does not come back as exactly 3; seconds still convert."""
+    from mvtrack.tracking import Frames, preset
+
+    for fps in (7.0, 10.0, 15.0, 29.97, 30.0, 59.94, 1e-3):
+        for name in ("paper1", "paper2"):
+            assert preset(name, fps=fps).frames().max_misses == 3
+    assert TrackerConfig(fps=10, max_coast=Frames(5)).frames().max_misses == 5
+    assert TrackerConfig(fps=10, max_coast=0.5).frames().max_misses == 5
+    assert str(Frames(3)) == "3 frames" and repr(Frames(3)) == "Frames(3)"

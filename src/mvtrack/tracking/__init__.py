@@ -18,7 +18,7 @@
 >>> from mvtrack.tracking import Tracker, TrackerConfig, track_detections
 """
 
-from mvtrack.tracking.config import TrackerConfig
+from mvtrack.tracking.config import Frames, TrackerConfig
 from mvtrack.tracking.log import TrackLog
 from mvtrack.tracking.offline import track_detections
 from mvtrack.tracking.presets import PRESETS, default, paper1, paper2, preset
@@ -27,6 +27,7 @@ from mvtrack.tracking.tracker import Tracker
 
 __all__ = [
     "PRESETS",
+    "Frames",
     "TrackLog",
     "TrackTable",
     "Tracker",

@@ -16,6 +16,23 @@ from mvtrack.registry import ASSIGN_RULES
 from mvtrack.tracking.scores import check_scale
 
 
+class Frames(int):
+    """A duration counted in frames, for the rules that the papers state in frames (paper 1:
+    "a track ends after 3 frames without a detection"): ``max_coast=Frames(3)`` is 3 frames at
+    any frame rate, where a number is seconds."""
+
+    def __repr__(self) -> str:
+        return f"Frames({int(self)})"
+
+    def __str__(self) -> str:
+        return f"{int(self)} frames"
+
+
+def in_frames(value: float, fps: float) -> int:
+    """A duration in frames: :class:`Frames` as given, seconds × ``fps`` rounded."""
+    return int(value) if isinstance(value, Frames) else _round(value * fps)
+
+
 @dataclass(frozen=True)
 class FrameParams:
     """The life-cycle parameters of a :class:`TrackerConfig` converted to frames."""
@@ -67,8 +84,9 @@ class TrackerConfig:
         association, if that comes within ``confirm_window`` seconds of its birth.
     confirm_window : float or None
         Seconds; ``None`` means ``confirm_hits`` frames (consecutive hits required).
-    max_coast : float
-        Seconds a confirmed track may coast (no detection) before it is deleted.
+    max_coast : float or Frames
+        Seconds (or :class:`Frames`) a confirmed track may coast (no detection) before it is
+        deleted.
     tentative_max_coast : float
         Seconds a tentative track may go without detection before it is deleted (0: the first
         miss deletes it).
@@ -256,7 +274,7 @@ class TrackerConfig:
         for name in ("max_coast", "tentative_max_coast"):
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
-                raise bad(name, "must be a finite number of seconds >= 0")
+                raise bad(name, "must be a finite number of seconds (or Frames) >= 0")
         m = self.recover_margin
         if not isinstance(m, (int, float)) or not math.isfinite(m) or m < 0:
             raise bad("recover_margin", "must be a finite number of pixels >= 0")
@@ -309,7 +327,7 @@ class TrackerConfig:
         return FrameParams(
             confirm_hits=self.confirm_hits,
             confirm_window=window,
-            max_misses=_round(self.max_coast * fps),
+            max_misses=in_frames(self.max_coast, fps),
             tentative_max_misses=_round(self.tentative_max_coast * fps),
             warmup_hits=self.warmup_hits if self.warmup else 0,
             r=None if self.measurement_std is None else self.measurement_std**2,

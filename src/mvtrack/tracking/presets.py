@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 from typing import Any
 
-from mvtrack.tracking.config import TrackerConfig
+from mvtrack.tracking.config import Frames, TrackerConfig
 
 __all__ = ["PRESETS", "default", "paper1", "paper2", "preset"]
 
@@ -53,7 +53,7 @@ def paper1(predictor: str = "kalman-ca", fps: float = 30.0, gate_px: float = 20.
         assign="nearest",
         fps=fps,
         confirm_hits=1,
-        max_coast=3 / fps,
+        max_coast=Frames(3),  # SPEC §1.1: 3 frames without a detection
         **_PAPER_COMMON,
     )
 
@@ -73,7 +73,7 @@ def paper2(distance: str = "coupled", fps: float = 15.0) -> TrackerConfig:
         assign="nearest",
         fps=fps,
         confirm_hits=1,
-        max_coast=3 / fps,
+        max_coast=Frames(3),  # SPEC §1.1: 3 frames without a detection
         **_PAPER_COMMON,
     )
 

@@ -267,9 +267,13 @@ def track_to_folder(
 
 
 def _config_dict(config: Any) -> dict[str, Any]:
+    from mvtrack.tracking.config import Frames
+
     out = {}
     for f in dataclasses.fields(config):
         value = getattr(config, f.name)
+        if isinstance(value, Frames):  # "3 frames", not a number of seconds
+            value = str(value)
         out[f.name] = dict(value) if isinstance(value, Mapping) else value
     return out
 
