@@ -82,3 +82,26 @@ def batch_signalled(tmp_path: Path, sig: int, group: bool = False) -> tuple[Any,
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     return proc, err, workers
+
+
+def stop_at_frame(monkeypatch: Any, n: int, stop: Any) -> None:
+    """Make the detector of every video run call ``stop()`` when it is given its ``n``-th
+    frame (send the process a signal, or raise ``KeyboardInterrupt`` as Ctrl-C does in the
+    frame loop)."""
+    import mvtrack.video.run as run
+
+    real = run.build_detector
+
+    def build(settings: Any) -> Any:
+        det = real(settings)
+        calls = {"n": 0}
+
+        def detect(frame: Any) -> Any:
+            calls["n"] += 1
+            if calls["n"] == n:
+                stop()
+            return det(frame)
+
+        return detect
+
+    monkeypatch.setattr(run, "build_detector", build)

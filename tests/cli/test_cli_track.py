@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
+from _media import stop_at_frame
 from mvtrack.cli import main
 from mvtrack.cli._options import parse_gate
 from mvtrack.config import RunSettings, load_config
@@ -149,23 +150,10 @@ def test_unknown_detector_and_predictor_are_one_line_errors(tmp_path, capsys) ->
 
 
 def test_ctrl_c_writes_what_was_tracked_and_exits_130(tmp_path, capsys, monkeypatch) -> None:
-    import mvtrack.video.run as run
+    def interrupt() -> None:
+        raise KeyboardInterrupt  # what Ctrl-C raises in the frame loop
 
-    real = run.build_detector
-
-    def interrupting(settings):
-        det = real(settings)
-        calls = {"n": 0}
-
-        def detect(frame):
-            calls["n"] += 1
-            if calls["n"] == 26:
-                raise KeyboardInterrupt  # what Ctrl-C raises in the frame loop
-            return det(frame)
-
-        return detect
-
-    monkeypatch.setattr(run, "build_detector", interrupting)
+    stop_at_frame(monkeypatch, 26, interrupt)
     video = _write_avi(tmp_path / "v.avi")
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out)]) == 130

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 import pytest
 
-from _media import batch_signalled
+from _media import batch_signalled, stop_at_frame
 from mvtrack.cli import main
 
 
@@ -37,23 +37,7 @@ def _write_avi(path: Path, n: int = 60) -> Path:
 def test_sigterm_in_track_writes_what_was_tracked_and_exits_143(tmp_path, capsys,
                                                                 monkeypatch) -> None:
     """The signal arrives in the frame loop (sent by the process to itself at frame 26)."""
-    import mvtrack.video.run as run
-
-    real = run.build_detector
-
-    def terminating(settings):
-        det = real(settings)
-        calls = {"n": 0}
-
-        def detect(frame):
-            calls["n"] += 1
-            if calls["n"] == 26:
-                os.kill(os.getpid(), signal.SIGTERM)
-            return det(frame)
-
-        return detect
-
-    monkeypatch.setattr(run, "build_detector", terminating)
+    stop_at_frame(monkeypatch, 26, lambda: os.kill(os.getpid(), signal.SIGTERM))
     before = signal.getsignal(signal.SIGTERM)
     video = _write_avi(tmp_path / "v.avi")
     out = tmp_path / "out"
@@ -73,27 +57,15 @@ def test_sigterm_in_track_writes_what_was_tracked_and_exits_143(tmp_path, capsys
 
 def test_ctrl_c_still_exits_130_after_a_sigterm_in_an_earlier_command(tmp_path, capsys,
                                                                        monkeypatch) -> None:
-    import mvtrack.video.run as run
-
-    real = run.build_detector
     send = {"sig": signal.SIGTERM}
 
-    def stopping(settings):
-        det = real(settings)
-        calls = {"n": 0}
+    def stop() -> None:
+        if send["sig"] == signal.SIGTERM:
+            os.kill(os.getpid(), signal.SIGTERM)
+        else:
+            raise KeyboardInterrupt
 
-        def detect(frame):
-            calls["n"] += 1
-            if calls["n"] == 10:
-                if send["sig"] == signal.SIGTERM:
-                    os.kill(os.getpid(), signal.SIGTERM)
-                else:
-                    raise KeyboardInterrupt
-            return det(frame)
-
-        return detect
-
-    monkeypatch.setattr(run, "build_detector", stopping)
+    stop_at_frame(monkeypatch, 10, stop)
     video = _write_avi(tmp_path / "v.avi")
     assert main(["track", str(video), "--out", str(tmp_path / "a"), "--no-video"]) == 143
     send["sig"] = signal.SIGINT

@@ -143,27 +143,12 @@ def test_sigterm_with_flush_keeps_what_was_streamed_and_writes_the_rest(
         tmp_path, capsys, monkeypatch) -> None:
     """SIGTERM at frame 40 of a run that flushes at every frame: exit 143, and the files hold
     frames 0 to 38 exactly as a plain run of 39 frames writes them."""
-    import mvtrack.video.run as run
-    from _media import box_video
-
-    real = run.build_detector
-
-    def terminating(settings):
-        det = real(settings)
-        calls = {"n": 0}
-
-        def detect(frame):
-            calls["n"] += 1
-            if calls["n"] == 40:
-                os.kill(os.getpid(), signal.SIGTERM)
-            return det(frame)
-
-        return detect
+    from _media import box_video, stop_at_frame
 
     video = box_video(tmp_path / "v.avi", n=80)
     assert main(["track", str(video), "--out", str(tmp_path / "plain"), "--no-video",
                  "--max-frames", "39"]) == 0
-    monkeypatch.setattr(run, "build_detector", terminating)
+    stop_at_frame(monkeypatch, 40, lambda: os.kill(os.getpid(), signal.SIGTERM))
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out), "--no-video", "--flush", "1e-9"]) == 143
     err = capsys.readouterr().err.strip().splitlines()[-1]
