@@ -146,12 +146,11 @@ def test_intersection_report(monkeypatch) -> None:
     segs = [seg for coll in ax.collections for seg in coll.get_segments()]
     assert len(heights) == 10 and len(segs) >= 10
     assert "pipeline blobs" in f["variant_reasons"]
-    # counts by the counting module: golden, seed 0. On the true tracks a left-turner that
-    # enters at frame 277 is lost in the box before it turns and is completed as straight;
-    # one enters at 304 and is incomplete; the two waiting vehicles stand ≥ 2 s
-    assert f["counts_from_true_tracks"] == [{"straight": 12, "left": 4, "right": 1,
-                                             "waiting": 2, "u-turn": 0, "incomplete": 1}]
-    assert f["counts_exact_runs_true_tracks"] == 0
+    # counts by the counting module: on the true tracks exactly paper 1's (every movement
+    # ends in the video; the two waiting vehicles stand ≥ 2 s)
+    assert f["counts_from_true_tracks"] == [{"straight": 11, "left": 6, "right": 1,
+                                             "waiting": 2, "u-turn": 0, "incomplete": 0}]
+    assert f["counts_exact_runs_true_tracks"] == 1
     got = kf["counts_per_run"][0]
     assert sum(got.values()) > 20 and kf["counts_exact_runs"] == 0  # spurious tracks count
     assert any(r[0].startswith("counting module") for r in rep.rows)

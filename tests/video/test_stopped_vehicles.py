@@ -24,6 +24,8 @@ def test_waiting_vehicles_keep_one_id_through_the_wait(tracker: str) -> None:
     for v in scene.ids_of("waiting").tolist():
         tid, share = run.match.followed_share(v, WAIT)
         assert share >= 0.99, f"vehicle {v}: one track follows {share:.0%} of its wait"
-        # the same track came with it to the stop line and leaves with it
-        whole_tid, whole = run.match.followed_share(v)
-        assert whole_tid == tid and whole >= 0.8, (v, whole_tid, tid, whole)
+        # the same track came with it to the stop line and leaves with it (a second track on
+        # a split two-tone vehicle may follow it as well)
+        ids, counts, n = run.match.followers(v)
+        whole = float(counts[ids == tid][0]) / n
+        assert whole >= 0.8, (v, tid, whole)

@@ -90,11 +90,11 @@ vehicles. The counting module (approaches outside the intersection box, a stand 
 a vehicle waiting) recovers them exactly in {summary['kalman-ca']['counts_exact_runs']} (KF),
 {summary['rls']['counts_exact_runs']} (RLS) and {summary['default']['counts_exact_runs']}
 (modern default) of {n_runs} runs, and in {fig['counts_exact_runs_true_tracks']} of {n_runs}
-even on the scene's true tracks: vehicles entering after about frame 250 have not finished
-their movement when the video ends at frame 359; one lost inside the intersection box is
-completed along its heading (a left-turner lost before it turns reads as straight), the others
-are reported incomplete. On the trackers' output every spurious track long enough to count
-(split halves of two-tone vehicles, fragments of a standing one) adds a movement, and a waiting
+on the scene's true tracks (the scene lets every vehicle leave the image before the last frame,
+so every movement ends in the video). On the trackers' output every spurious track long
+enough to count (split halves of two-tone vehicles, fragments of a standing one) adds a
+movement; a track lost inside the intersection box is completed along its heading (a
+left-turner lost before it turns reads as straight) or reported incomplete; and a waiting
 vehicle counts as waiting only when one of its tracks stands ≥ 2 s.
 
 Spurious tracks are sorted by where they sit (within 8 px of a pole, within 20 px of a vehicle,

@@ -114,7 +114,13 @@ def _x5_place(
                 s = _waiting_profile(t, v, d_in - X5_STOP - body[i, 0] / 2)
                 t0 = float(t[np.argmax(s >= 0)]) if np.any(s >= 0) else 0.0
             else:
-                t0 = float(rng.uniform(0.0, 300.0))
+                # entries over frames 0–300 (SPEC X5), but late enough only if the vehicle
+                # still leaves the image by the last frame: every movement is complete in the
+                # video, as the paper's counts by movement need
+                last = min(300.0, float(n_frames - 1) - float(path.lengths.sum()) / v)
+                if last < 0.0:
+                    continue
+                t0 = float(rng.uniform(0.0, last))
                 s = v * (t - t0)
             p, h = place(path, s)
             if i:
@@ -136,7 +142,10 @@ def x5_intersection(seed: int | np.random.Generator = 0) -> Scene:
     with one 30 px lane per direction. 20 vehicles (categories): 11 ``straight`` (6 east-west,
     5 north-south), 6 ``left`` (40 px arc), 1 ``right`` (15 px arc), 2 ``waiting`` (brake to
     the stop line, stand still from frame 60 to 300, then drive straight on). Speeds uniform
-    in 1.5–3 px/frame; entries (path starts, 20 px off the image) uniform over frames 0–300.
+    in 1.5–3 px/frame; entries (path starts, 20 px off the image) uniform over frames 0–300,
+    but no later than lets the vehicle leave the image by the last frame (359), so that every
+    movement ends in the video, as paper 1's counts by movement (11 / 6 / 1 / 2) need: the
+    counting module recovers them exactly from the true tracks.
     Vehicles are 14–18 × 8–10 px two-tone bodies that turn with their heading.
 
     Entry times and speeds are drawn by rejection: a vehicle is placed only if its centre
