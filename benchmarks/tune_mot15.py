@@ -44,6 +44,9 @@ GRID: dict[str, list[Any]] = {
 
 #: Each tried from the best configuration of the grid, one at a time (not part of the grid).
 VARIANTS: dict[str, list[Any]] = {"nms_iou": [0.5, 0.7], "score_scale": ["prob"]}
+#: Parameters outside the grid, each moved alone from the defaults (``TrackerConfig()``) over
+#: these values, with its own leave-one-sequence-out choice.
+FROM_DEFAULTS: dict[str, list[Any]] = {"coast_output": [0.0, 0.04, 0.08, 0.12, 0.2, None]}
 #: fields that change only what an offline run writes
 OFFLINE_ONLY = ("min_track_length",)
 
@@ -101,7 +104,8 @@ def _mean(res: dict[str, dict[str, float]], mode: str, key: str) -> float:
 
 
 def report(entries: list[dict[str, Any]], command: str, seconds: float,
-           variants: list[dict[str, Any]] | None = None) -> str:
+           variants: list[dict[str, Any]] | None = None,
+           moved: dict[str, list[dict[str, Any]]] | None = None) -> str:
     seqs = list(SEQUENCES)
     best = max(entries, key=lambda e: objective(e["res"], seqs))
     lines = ["# MOT15: choosing the score-aware defaults", "", f"Command: `{command}` "
@@ -167,6 +171,35 @@ def report(entries: list[dict[str, Any]], command: str, seconds: float,
                 f"{_mean(v['res'], m, k):.3f}" for m in MODES for k in ("MOTA", "IDF1")) + " |")
         lines += ["", "`score_scale=prob` reads the raw DPM scores as probabilities (clipped to "
                   "[0, 1]): the scale the automatic calibration exists for."]
+    for key, runs in (moved or {}).items():
+        from mvtrack.tracking import TrackerConfig as _Config
+
+        now = getattr(_Config(), key)
+        lines += ["", f"## `{key}` from the defaults (outside the grid)", "",
+                  f"Each value with every other parameter at its default (`{key}` = {now}); "
+                  "objective as above.", "",
+                  "| value | objective (all four) | online MOTA | online IDF1 | offline MOTA | "
+                  "offline IDF1 |", "|---|---:|---:|---:|---:|---:|"]
+        for run in runs:
+            mark = " (default)" if run["value"] == now else ""
+            lines.append(f"| {run['value']}{mark} | {objective(run['res'], seqs):.4f} | "
+                         + " | ".join(f"{_mean(run['res'], m, k):.3f}" for m in MODES
+                                      for k in ("MOTA", "IDF1")) + " |")
+        lines += ["", "| held out | chosen on the other three | held-out online MOTA / IDF1 | "
+                  "offline MOTA / IDF1 |", "|---|---|---|---|"]
+        picks = []
+        for held in seqs:
+            train = [x for x in seqs if x != held]
+            pick = max(runs, key=lambda r: objective(r["res"], train))
+            picks.append(pick["value"])
+            r = pick["res"]
+            lines.append(f"| {held} | {pick['value']} | {r[f'{held}|online']['MOTA']:.3f} / "
+                         f"{r[f'{held}|online']['IDF1']:.3f} | "
+                         f"{r[f'{held}|offline']['MOTA']:.3f} / "
+                         f"{r[f'{held}|offline']['IDF1']:.3f} |")
+        top = max(set(picks), key=picks.count)
+        lines += ["", f"Leave-one-out picks {top} in {picks.count(top)} of {len(picks)} folds "
+                  f"(the default: {now})."]
     lines += ["", "## Top ten on all four", "",
               "| configuration | objective | online MOTA / IDF1 | offline MOTA / IDF1 |",
               "|---|---:|---|---|"]
@@ -213,11 +246,14 @@ def main(argv: list[str] | None = None) -> int:
         for v in values:
             res = run_one({**best["cfg"], key: v}, args.work)
             variants.append({"setting": f"{key}={v}", "res": res})
+    moved: dict[str, list[dict[str, Any]]] = {}
+    for key, values in FROM_DEFAULTS.items():
+        moved[key] = [{"value": v, "res": run_one({key: v}, args.work)} for v in values]
     seconds = time.perf_counter() - t0
     if args.json:
         args.json.write_text(json.dumps(entries, indent=1))
     text = report(entries, "python benchmarks/tune_mot15.py " + " ".join(
-        argv if argv is not None else sys.argv[1:]), seconds, variants)
+        argv if argv is not None else sys.argv[1:]), seconds, variants, moved)
     if args.out:
         args.out.write_text(text)
     print(text)

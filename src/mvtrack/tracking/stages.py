@@ -136,14 +136,16 @@ class Associator:
         n = tab.ints.shape[0]
         m = dets.xy.shape[0]
         staged = False
-        first = dets if sel is None else dets.take(sel[0])  # the high detections
-        if len(first) == 0:
+        m1 = m if sel is None else sel[0].size  # the high detections
+        if m1 == 0:
             mt = md = ud = _EMPTY
         elif self._fast_gate is not None:
+            high = drow if sel is None else drow.take(sel[0], 0)  # x, y, w, h (+ NaN row)
             mt, md, ud, staged = self._associate_fast(
-                ps, gxy, first, f2, r_rows, tab.floats[:, WH]
+                ps, gxy, high[:m1, :2], high[:m1, 2:], f2, r_rows, tab.floats[:, WH]
             )
         else:
+            first = dets if sel is None else dets.take(sel[0])
             mt, md, ud = self._associate(ps, gxy, tab, first)
         if sel is not None:  # back to the rows of dets
             md, ud = sel[0].take(md), sel[0].take(ud)
@@ -239,17 +241,18 @@ class Associator:
         return a.track, a.det, a.unmatched_dets
 
     def _associate_fast(
-        self, ps: Any, gxy: FloatArray, dets: Detections, f2: FloatArray | None,
-        r_rows: FloatArray | None, twh: FloatArray,
+        self, ps: Any, gxy: FloatArray, dxy: FloatArray, dwh: FloatArray,
+        f2: FloatArray | None, r_rows: FloatArray | None, twh: FloatArray,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], bool]:
         """Gate and assign through :mod:`mvtrack.association.discs` (disc-shaped gates);
-        the flag says whether the second stage was done too. ``f2`` (N, 2) stretches the
+        ``dxy``, ``dwh`` (M, 2) are the detections' centres and sizes; the flag says whether the
+        second stage was done too. ``f2`` (N, 2) stretches the
         Euclidean gates per axis (``Δx²/f_x² + Δy²/f_y² <= gate``), ``r_rows`` (N,) are the
         tracks' measurement variances, ``twh`` (N, 2) their box sizes (for the size term of
         the Euclidean cost, ``config.size_weight``)."""
-        n, m = gxy.shape[0], dets.xy.shape[0]
+        n, m = gxy.shape[0], dxy.shape[0]
         scale = f2
-        size = self._size_term(twh, dets.wh)
+        size = self._size_term(twh, dwh)
         if self._fast_gate == "mahalanobis":
             r = self.predictor.r if r_rows is None else r_rows
             scale = self.predictor.position_var(ps) + r  # S = (P̄ + r) I
@@ -258,16 +261,16 @@ class Associator:
         if rule == "optimal" and not self._assign_params and n * m <= discs.DENSE_LSA:
             if self._gate2 is not None:  # both stages from one distance matrix
                 mt, md, ud = discs.dense_two_stage(
-                    gxy, dets.xy, scale, self._gate, self._gate2, f2, size
+                    gxy, dxy, scale, self._gate, self._gate2, f2, size
                 )
                 return mt, md, ud, True
             else:
-                mt, md = discs.dense_optimal(gxy, dets.xy, scale, self._gate, size)
+                mt, md = discs.dense_optimal(gxy, dxy, scale, self._gate, size)
         elif rule == "optimal" and not self._assign_params:
-            ti, dj, cost = discs.gate_pairs(gxy, dets.xy, scale, self._gate, size)
+            ti, dj, cost = discs.gate_pairs(gxy, dxy, scale, self._gate, size)
             mt, md = discs.optimal(ti, dj, cost, n, m, self._gate)
         else:
-            ti, dj, cost = discs.gate_pairs(gxy, dets.xy, scale, self._gate, size)
+            ti, dj, cost = discs.gate_pairs(gxy, dxy, scale, self._gate, size)
             a = assign_pairs(ti, dj, cost, n, m, rule, **self._assign_params)
             mt, md = a.track, a.det
         used = np.zeros(m, dtype=bool)
