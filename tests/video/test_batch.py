@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from _media import batch_signalled, box_video
+from mvtrack.analytics.outputs import read_table
 from mvtrack.cli import main
 from mvtrack.cli.batch import expand_videos
 from mvtrack.config import RunSettings
@@ -263,3 +264,35 @@ def test_scheduler_without_workers_is_an_error_not_a_hang(tmp_path) -> None:
             track_many([video], tmp_path / "out", NO_VIDEO, scheduler=empty.scheduler_address,
                        timeout=1.0)
     assert not (tmp_path / "out").exists()
+
+
+def test_batch_folder_holds_the_files_of_track(videos, tmp_path, scheduler) -> None:
+    """With an [analytics] table, each batch folder holds what `mvtrack track` writes for the
+    same video and settings: states.csv, the analytics tables and the video drawn with them,
+    the same bytes."""
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text("[analytics]\ninterval = 1\nmin_frames = 3\n"
+                   "[analytics.lines.middle]\npoints = [[48, 0], [48, 64]]\n"
+                   "[analytics.zones.left]\npolygon = [[0, 0], [48, 0], [48, 64], [0, 64]]\n")
+    out = tmp_path / "batch"
+    code = main(["batch", str(videos["boxes"]), str(videos["cam_a"]), "--out", str(out),
+                 "--scheduler", scheduler, "--config", str(cfg), "--max-frames", "30"])
+    assert code == 0
+    for name, video in (("boxes", videos["boxes"]), ("cam", videos["cam_a"])):
+        seq = tmp_path / f"seq-{name}"
+        assert main(["track", str(video), "--out", str(seq), "--config", str(cfg),
+                     "--max-frames", "30"]) == 0
+        files = sorted(p.name for p in (out / name).iterdir())
+        assert files == sorted(p.name for p in seq.iterdir())
+        assert {"results.txt", "states.csv", "counts.csv", "movements.csv", "speeds.csv",
+                "tracks.csv", "tracks.mp4"} <= set(files)
+        for f in ("results.txt", "states.csv", "counts.csv", "movements.csv", "speeds.csv",
+                  "tracks.csv", "tracks.mp4"):
+            assert (out / name / f).read_bytes() == (seq / f).read_bytes(), (name, f)
+    # the box crosses the line once, leftwards, and enters the zone left of it once
+    counts = read_table(out / "boxes" / "counts.csv")
+    n = {(e, d): sum(int(c) for e2, d2, c in zip(counts["name"], counts["direction"],
+                                                 counts["count"], strict=True)
+                     if (e2, d2) == (e, d))
+         for e, d in (("middle", "forward"), ("middle", "backward"), ("left", "entries"))}
+    assert n == {("middle", "forward"): 0, ("middle", "backward"): 1, ("left", "entries"): 1}

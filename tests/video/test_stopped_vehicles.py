@@ -29,3 +29,41 @@ def test_waiting_vehicles_keep_one_id_through_the_wait(tracker: str) -> None:
         ids, counts, n = run.match.followers(v)
         whole = float(counts[ids == tid][0]) / n
         assert whole >= 0.8, (v, tid, whole)
+
+
+def test_states_csv_gives_each_stopped_row_its_template_score(tmp_path) -> None:
+    """states.csv of X5 (its two waiting vehicles are held by template matching through their
+    wait): every ``stopped`` row has the NCC score of its match, at least the acceptance
+    threshold and at most 1; every other row has none. Streamed (``--flush``), the file is
+    the same; a higher threshold bounds the scores it holds."""
+    import numpy as np
+
+    from mvtrack.analytics.outputs import read_table
+    from mvtrack.config import RunSettings
+    from mvtrack.sim.intersection import x5_intersection
+    from mvtrack.sim.render import render_frames
+    from mvtrack.video.run import track_to_folder, write_tables
+
+    scene = x5_intersection(0)
+    frames = list(render_frames(scene, 0))
+
+    def states(name: str, flush: float | None = None, min_score: float | None = None):
+        params = {} if min_score is None else {"min_score": min_score}
+        settings = RunSettings(detector="disturbance-map", video=False, template_params=params)
+        out = tmp_path / name
+        run = track_to_folder(frames, fps=30.0, size=scene.size, settings=settings, out=out,
+                              progress=False, flush=flush)
+        write_tables(run, out, settings)
+        return read_table(out / "states.csv"), (out / "states.csv").read_bytes()
+
+    for table, threshold in ((states("plain")[0], 0.8), (states("strict", None, 0.9)[0], 0.9)):
+        state = np.array(table["state"])
+        score = np.array(table["template_score"])
+        stopped = state == "stopped"
+        assert stopped.sum() >= 100  # the two waits, ~8 s at 30 fps, partly held by template
+        assert (np.array(table["evidence"])[stopped] == "template").all()
+        value = score[stopped].astype(float)
+        assert (value >= threshold).all() and (value <= 1.0).all(), (value.min(), value.max())
+        assert (score[~stopped] == "").all()
+    # streaming writes the scores of each flushed frame and then forgets them
+    assert states("streamed", flush=1e-9)[1] == states("again")[1]

@@ -97,9 +97,42 @@ def test_streamed_states_csv_equals_the_one_written_at_the_end(tmp_path, monkeyp
                             out=tmp_path / "plain", progress=False)
     track_to_folder(frames, fps=30.0, size=(160, 120), settings=_settings(),
                     out=tmp_path / "s", progress=False, flush=2.0)
-    expected = table_csv(states_table(plain.log, plain.result.flags))
+    expected = table_csv(states_table(plain.log, plain.result.flags, plain.result.scores))
     assert expected.count("\n") > 40
     assert (tmp_path / "s" / "states.csv").read_text() == expected
+
+
+def test_streamed_template_scores_are_written_then_released(tmp_path) -> None:
+    """The template score of a held row reaches states.csv at the flush of its frame, and the
+    frame's scores are let go once written (memory stays flat on an endless stream)."""
+    import gc
+    import weakref
+
+    from mvtrack.analytics.outputs import read_table
+    from mvtrack.types import TrackFrame, TrackState
+    from mvtrack.video.loop import HeldScores
+
+    ticks = itertools.count()
+    out = StreamingOutput(tmp_path, 4.0, clock=ticks.__next__)  # a flush every 4 frames
+    xy, stopped = np.array([[50.0, 60.0], [90.0, 20.0]]), int(TrackState.STOPPED)
+    refs = []
+    for k in range(10):
+        held = k % 3 == 0  # track 7 is held by template on frames 0, 3, 6, 9
+        tf = TrackFrame(k, np.array([7, 8]), np.array([stopped if held else 1, 1]),
+                        np.array([-1 if held else 0, 1]), xy, xy, xy, xy * 0 + 9, xy * 0)
+        score = np.array([0.8 + k / 100]) if held else np.zeros(0)
+        refs.append(weakref.ref(score))
+        out.add(tf, np.zeros(2, np.int8), HeldScores(np.array([7] if held else [], np.int64),
+                                                     score))
+        del score
+    gc.collect()
+    assert out.flushes == 2 and all(r() is None for r in refs[:8])  # frames 0–7 written
+    out.close()
+    table = read_table(tmp_path / "states.csv")
+    got = {(f, i): s for f, i, s in zip(table["frame"], table["id"], table["template_score"],
+                                        strict=True) if s}
+    assert got == {("1", "7"): "0.8", ("4", "7"): "0.83", ("7", "7"): "0.86",
+                   ("10", "7"): "0.89"}
 
 
 def test_cli_streamed_run_on_the_real_video_equals_the_plain_run(tmp_path, vtest_path) -> None:

@@ -413,9 +413,11 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
     """The guard around the NCC search: found where last measured, and not covered by a
     detection — checked on a stand-in search that finds every track. (That a track has driven
     somewhere before it is searched is the template bank's check,
-    tests/detection/test_template.py.)"""
+    tests/detection/test_template.py.) The scores of the accepted matches go to the rows the
+    tracker held with them."""
     from types import SimpleNamespace
 
+    from mvtrack.types import TrackState
     from mvtrack.video import StoppedVehicleRescuer
 
     class FindsAll:
@@ -423,10 +425,10 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
             self.offset = np.zeros((4, 2))
             self.centres = None
 
-        def callback(self, image):
+        def search(self, image):
             def search(uids, xy, wh):
                 self.centres = np.array(xy)
-                return np.ones(len(uids), bool), xy + self.offset[uids]
+                return np.ones(len(uids), bool), xy + self.offset[uids], 0.81 + 0.05 * uids
 
             return search
 
@@ -447,5 +449,17 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
     assert found.tolist() == [True, True, False, False]
     np.testing.assert_allclose(xy[:2], last[:2])
     assert np.isnan(xy[2:]).all()
+    # the tracker's output: uids 1, 0 held (IDs 11, 10), uid 2 coasting, a new tentative row
+    held, coast = int(TrackState.STOPPED), int(TrackState.COASTING)
+    tracker.row_uids = np.array([1, 2, 0, 7])
+    out = TrackFrame(1, np.array([11, 12, 10, -1]),
+                     np.array([held, coast, held, int(TrackState.TENTATIVE)]),
+                     np.array([-1, -1, -1, 0]), *(np.ones((4, 2)) for _ in range(5)))
+    guard.observe(image, covering, out)
+    assert guard.held_scores.track_id.tolist() == [11, 10]
+    np.testing.assert_allclose(guard.held_scores.score, [0.86, 0.81])
+    guard.callback(image, covering)  # a frame whose step offers it no track
+    guard.observe(image, covering, out)
+    assert guard.held_scores.track_id.size == 0
     with pytest.raises(ValueError, match="max_shift"):
         StoppedVehicleRescuer(inner, tracker, max_shift=0.0)

@@ -64,17 +64,44 @@ def write_outputs(result: AnalyticsResult, folder: str | os.PathLike[str]) -> di
     return {name: write_table(folder / f"{name}.csv", getattr(result, name)) for name in FILES}
 
 
-def states_table(log: Any, flags: Sequence[Any] | None = None) -> Table:
-    """One row per public track row of a :class:`~mvtrack.tracking.TrackLog` (``states.csv``):
-    ``frame`` (1-based, as in ``results.txt``), ``id``, the tracker's ``state``
-    (``confirmed``: updated by a detection; ``stopped``: held by template matching;
-    ``coasting``: no measurement, the prediction), the ``evidence`` of the row
-    (``detection``, ``template`` or ``prediction``), the filter's speed in px/frame and
-    ``blob``: for a row updated by a detection, whether its box came from a ``plain`` blob,
-    from fragments ``merged`` into one predicted box or from a blob ``split`` among several
-    tracks (``flags[k][j]`` of detection ``j`` of frame ``k``, as
-    :attr:`mvtrack.video.PipelineResult.flags` keeps them; all ``plain`` without ``flags``);
-    empty for the rows without a detection."""
+def states_table(
+    log: Any, flags: Sequence[Any] | None = None, scores: Sequence[Any] | None = None
+) -> Table:
+    """One row per public track row of a :class:`~mvtrack.tracking.TrackLog` (``states.csv``).
+
+    Columns:
+
+    - ``frame`` (1-based, as in ``results.txt``) and ``id``;
+    - ``state``, the tracker's: ``confirmed`` (updated by a detection), ``stopped`` (held by
+      template matching), ``coasting`` (no measurement, the prediction);
+    - ``evidence`` of the row: ``detection``, ``template`` or ``prediction``;
+    - ``template_score``: for a ``stopped`` row the NCC score of the template match that held
+      it (at least the acceptance threshold, ``[templates] min_score``, 0.8 by default, and at
+      most 1); empty for the other rows (``scores[k]`` of frame ``k``, the pair
+      ``(track_id, score)`` of its held rows, as :attr:`mvtrack.video.PipelineResult.scores`
+      keeps them; empty everywhere without ``scores``);
+    - ``speed_px_per_frame``, the filter's speed;
+    - ``blob``: for a row updated by a detection, whether its box came from a ``plain`` blob,
+      from fragments ``merged`` into one predicted box or from a blob ``split`` among several
+      tracks (``flags[k][j]`` of detection ``j`` of frame ``k``, as
+      :attr:`mvtrack.video.PipelineResult.flags` keeps them; all ``plain`` without ``flags``);
+      empty for the rows without a detection.
+
+    Parameters
+    ----------
+    log : TrackLog
+        The rows of the run (or of the frames not yet written, for a streaming run).
+    flags : sequence, optional
+        Indexed by frame number: the blob flag of each detection of the frame.
+    scores : sequence, optional
+        Indexed by frame number: ``(track_id, score)`` arrays of the rows the frame held by
+        template matching.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns, rows sorted by frame, then ID.
+    """
     from mvtrack.detection.splitmerge import FLAG_NAMES
     from mvtrack.types import TrackState
 
@@ -86,6 +113,7 @@ def states_table(log: Any, flags: Sequence[Any] | None = None) -> Table:
     evidence = np.where(st == int(TrackState.STOPPED), "template",
                         np.where(det >= 0, "detection", "prediction"))
     frame0 = c["frame"][keep]
+    tid = c["track_id"][keep]
     blob = np.full(det.shape, "", dtype=object)
     for i in np.flatnonzero(det >= 0):
         f = int(frame0[i])
@@ -93,16 +121,42 @@ def states_table(log: Any, flags: Sequence[Any] | None = None) -> Table:
         if flags is not None and f < len(flags) and det[i] < len(flags[f]):
             code = int(flags[f][det[i]])
         blob[i] = FLAG_NAMES[code]
-    frame, tid = frame0 + 1, c["track_id"][keep]
+    score = np.full(det.shape, np.nan)
+    held = np.flatnonzero(st == int(TrackState.STOPPED))
+    if scores is not None and held.size:
+        _fill_scores(score, held, frame0[held], tid[held], scores)
+    frame = frame0 + 1
     order = np.lexsort((tid, frame))
     return {
         "frame": frame[order],
         "id": tid[order],
         "state": names[st][order],
         "evidence": evidence[order],
+        "template_score": score[order],
         "speed_px_per_frame": np.linalg.norm(c["velocity"][keep], axis=1)[order],
         "blob": blob[order],
     }
+
+
+def _fill_scores(score: np.ndarray, rows: np.ndarray, frame: np.ndarray, tid: np.ndarray,
+                 scores: Sequence[Any]) -> None:
+    """Put into ``score[rows]`` the score ``scores[frame]`` gives to ``(frame, tid)``."""
+    frames = [f for f in np.unique(frame).tolist() if f < len(scores)]
+    pairs = [(f, scores[f]) for f in frames]  # one per frame with held rows
+    pairs = [(f, np.asarray(ids, np.int64), np.asarray(s, np.float64)) for f, (ids, s) in pairs
+             if len(ids)]
+    if not pairs:
+        return
+    f_tab = np.concatenate([np.full(ids.size, f, np.int64) for f, ids, _ in pairs])
+    id_tab = np.concatenate([ids for _, ids, _ in pairs])
+    s_tab = np.concatenate([s for _, _, s in pairs])
+    span = int(max(id_tab.max(), tid.max())) + 1
+    key_tab = f_tab * span + id_tab
+    order = np.argsort(key_tab, kind="stable")
+    key = frame.astype(np.int64) * span + tid
+    pos = np.minimum(np.searchsorted(key_tab[order], key), key_tab.size - 1)
+    ok = key_tab[order][pos] == key
+    score[rows[ok]] = s_tab[order][pos][ok]
 
 
 def read_table(path: str | os.PathLike[str]) -> dict[str, list[str]]:

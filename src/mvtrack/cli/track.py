@@ -63,8 +63,9 @@ def register(app: typer.Typer) -> None:
         ] = None,
     ) -> None:
         """Track the moving objects of VIDEO; write results.txt (MOTChallenge), tracks.mp4,
-        trajectories.png, summary.json and states.csv (every row's state, its evidence and
-        whether its box came from a plain, merged or split blob)
+        trajectories.png, summary.json and states.csv (every row's state, its evidence, the
+        template-matching score of a stopped row and whether its box came from a plain,
+        merged or split blob)
         into --out; with an [analytics] table in --config, also counts.csv, movements.csv,
         speeds.csv and tracks.csv.
 
@@ -75,6 +76,7 @@ def register(app: typer.Typer) -> None:
         from mvtrack.cli import _signals
         from mvtrack.errors import InputError
         from mvtrack.video import track_video
+        from mvtrack.video.run import write_tables
 
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
@@ -97,18 +99,8 @@ def register(app: typer.Typer) -> None:
         )
         for path in run.paths.values():
             typer.echo(f"  {path}")
-        if "states" not in run.paths:  # a streaming run wrote it as it went
-            from mvtrack.analytics.outputs import states_table, write_table
-
-            typer.echo(f"  {write_table(out / 'states.csv', states_table(run.log, res.flags))}")
-        if settings.analytics is not None and res.error is None:
-            from mvtrack.analytics import analyse_folder, settings_from_dict
-            from mvtrack.analytics.outputs import write_outputs
-
-            result = analyse_folder(out, settings_from_dict(settings.analytics, config or ""),
-                                    fps)
-            for path in write_outputs(result, out).values():
-                typer.echo(f"  {path}")
+        for path in write_tables(run, out, settings, fps=fps).values():
+            typer.echo(f"  {path}")
         if res.interrupted:
             print(
                 f"error: {_signals.interrupt_word()} after {res.n_frames} frames; "

@@ -6,19 +6,21 @@
           ─▶ build: detector, tracker, rescuer (stopped vehicles, rescue.py)
           ─▶ loop.run_frames: detector ─▶ Detections ─▶ Tracker.step(dets, rescue) ─▶ TrackFrame
           ─▶ run.track_to_folder: results.txt, tracks.mp4, trajectories.png, summary.json
+          ─▶ run.write_tables: states.csv; counts, movements, speeds, tracks.csv ([analytics])
 
 Nothing below this package imports it: the tracker and the detection front ends know nothing
 of each other; the video glue connects them.
 """
 
 from mvtrack.video.build import build_detector, build_rescuer, build_tracker, build_tracker_config
-from mvtrack.video.loop import PipelineResult, progress_bar, run_frames
+from mvtrack.video.loop import HeldScores, PipelineResult, progress_bar, run_frames
 from mvtrack.video.rescue import StoppedVehicleRescuer, TemplateRescuer
-from mvtrack.video.run import RunOutput, track_to_folder, track_video
+from mvtrack.video.run import RunOutput, track_to_folder, track_video, write_tables
 from mvtrack.video.settings import REFERENCE_SIZE, resolve_settings
 
 __all__ = [
     "REFERENCE_SIZE",
+    "HeldScores",
     "PipelineResult",
     "RunOutput",
     "StoppedVehicleRescuer",
@@ -32,4 +34,5 @@ __all__ = [
     "run_frames",
     "track_to_folder",
     "track_video",
+    "write_tables",
 ]

@@ -143,7 +143,10 @@ def track_one(
     video : str
         Path or URL, opened with :func:`mvtrack.io.video.open_source`.
     out : str
-        Output folder (``results.txt``, ``summary.json``, ``trajectories.png``, ``tracks.mp4``).
+        Output folder: the files of ``mvtrack track`` (``results.txt``, ``states.csv``,
+        ``summary.json``, ``trajectories.png``, ``tracks.mp4``; with an ``[analytics]`` table
+        in ``settings`` also ``counts.csv``, ``movements.csv``, ``speeds.csv``,
+        ``tracks.csv``: :func:`mvtrack.video.run.write_tables`).
     settings : RunSettings
         As built by ``mvtrack track`` from its options; the size-dependent defaults are filled
         in here for this video's size (:func:`mvtrack.video.resolve_settings`).
@@ -165,7 +168,7 @@ def track_one(
     """
     import cv2
 
-    from mvtrack.video.run import track_video
+    from mvtrack.video.run import track_video, write_tables
 
     cv2.setNumThreads(1)
     t0 = time.perf_counter()
@@ -177,6 +180,7 @@ def track_one(
             )
         else:
             run = _track_until_stopped(video, out, settings, fps, max_frames, _StopFlag(stop))
+        write_tables(run, out, settings, fps=fps)  # as `mvtrack track` does after its run
     except KeyboardInterrupt:
         item.status, item.error = "cancelled", "interrupted before any frame was tracked"
     except Exception as exc:  # one video's failure must not end the batch
@@ -265,8 +269,10 @@ def finished_on_disk(item: BatchItem, since: float) -> BatchItem | None:
                      seconds=float(summary.get("seconds", 0.0)))
 
 
-#: the files :func:`mvtrack.video.track_to_folder` writes (each through a temporary file)
-_OUTPUTS = ("results.txt", "summary.json", "trajectories.png", "tracks.mp4")
+#: the files :func:`mvtrack.video.track_to_folder` and :func:`mvtrack.video.write_tables`
+#: write (each through a temporary file)
+_OUTPUTS = ("results.txt", "summary.json", "trajectories.png", "tracks.mp4", "states.csv",
+            "counts.csv", "movements.csv", "speeds.csv", "tracks.csv")
 
 
 def remove_temp_files(folder: Path) -> None:

@@ -14,7 +14,9 @@ A detector may also take part in the tracking (the scene front end,
 loop reads the video through it (a background bootstrap from the first frames); if it has
 ``observe(dets, tracks)`` the loop calls it after each ``tracker.step`` (predicted boxes for
 the next frame, the size prior taught by the tracks); its ``flags`` after each call (plain /
-merged / split of each box) are kept in :attr:`PipelineResult.flags`.
+merged / split of each box) are kept in :attr:`PipelineResult.flags`. A rescuer's
+``held_scores`` after each frame (the NCC score of each row held by template matching) are
+kept in :attr:`PipelineResult.scores`.
 It shows a tqdm progress bar on stderr when stderr is a terminal, stops cleanly on Ctrl-C
 (``KeyboardInterrupt`` inside the loop ends it with ``interrupted=True``; what was tracked so
 far is returned) and treats a source that fails mid-way the same (``error`` holds the message).
@@ -27,7 +29,7 @@ import sys
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,6 +38,25 @@ from mvtrack.types import Detections, TrackFrame
 
 Image = NDArray[np.uint8]
 RescueFn = Callable[..., Any]
+
+
+class HeldScores(NamedTuple):
+    """The rows of one frame held by template matching and the NCC score of each match.
+
+    Attributes
+    ----------
+    track_id : (K,) int64
+        Public IDs of the rows in state ``STOPPED``.
+    score : (K,) float64
+        The NCC of the match that held each of them.
+    """
+
+    track_id: NDArray[np.int64]
+    score: NDArray[np.float64]
+
+
+#: a frame without rows held by template matching
+NO_SCORES = HeldScores(np.zeros(0, np.int64), np.zeros(0, np.float64))
 
 
 class Detector(Protocol):
@@ -84,6 +105,9 @@ class PipelineResult:
         Per frame, the blob flag of each detection
         (:data:`~mvtrack.detection.splitmerge.PLAIN`, ``MERGED`` or ``SPLIT``); all plain
         for a detector that has no ``flags``.
+    scores : list of HeldScores
+        Per frame, the public ID of each row held by template matching and the NCC score of
+        its match (:func:`scores_of`; none in a run without a rescuer).
     """
 
     tracks: list[TrackFrame] = field(default_factory=list)
@@ -93,6 +117,7 @@ class PipelineResult:
     interrupted: bool = False
     error: str | None = None
     flags: list[NDArray[np.int8]] = field(default_factory=list)
+    scores: list[HeldScores] = field(default_factory=list)
 
     @property
     def ended_early(self) -> bool:
@@ -116,6 +141,13 @@ def flags_of(detector: Any, n: int) -> NDArray[np.int8]:
     if flags is None or len(flags) != n:
         return np.zeros(n, np.int8)  # PLAIN
     return np.array(flags, np.int8)
+
+
+def scores_of(rescuer: Any) -> HeldScores:
+    """The rows the rescuer held in the frame it just observed, with their NCC scores (none
+    for a rescuer that has no ``held_scores``, or no rescuer)."""
+    held = getattr(rescuer, "held_scores", None)
+    return NO_SCORES if held is None else HeldScores(*held)
 
 
 def progress_bar(total: int | None, desc: str, enabled: bool | None = None) -> Any:
@@ -163,8 +195,9 @@ def run_frames(
     desc : str
         Label of the progress bar.
     keep : bool
-        Keep every frame's tracks and flags in the result (``False``: a streaming run, whose
-        ``on_frame`` writes them, keeps memory flat; ``tracks`` and ``flags`` stay empty).
+        Keep every frame's tracks, flags and scores in the result (``False``: a streaming
+        run, whose ``on_frame`` writes them, keeps memory flat; ``tracks``, ``flags`` and
+        ``scores`` stay empty).
 
     Returns
     -------
@@ -205,6 +238,7 @@ def run_frames(
                 rescuer.observe(image, dets, tracks)
             if keep:
                 result.tracks.append(tracks)
+                result.scores.append(scores_of(rescuer))
             result.n_frames = k + 1
             result.n_detections += len(dets)
             if on_frame is not None:

@@ -7,6 +7,11 @@ ones found by template matching are held in state ``STOPPED``.
 appearances and does the NCC search; here :class:`TemplateRescuer` maps the tracker's output
 rows to its uids and feeds the bank, and :class:`StoppedVehicleRescuer` accepts only what a
 stopped vehicle looks like.
+
+Both keep, per frame, the NCC score of every match they accepted, and after the tracker's step
+give it to the rows the tracker held with it (:attr:`StoppedVehicleRescuer.held_scores`, by
+public track ID): the evidence of the ``stopped`` rows of ``states.csv``. The tracker's
+``rescue(uids, predicted_xy, wh) -> (found, xy)`` callback does not carry it.
 """
 
 from __future__ import annotations
@@ -18,14 +23,64 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.errors import InputError
-from mvtrack.types import Detections, TrackFrame
-from mvtrack.video.loop import RescueFn
+from mvtrack.types import Detections, TrackFrame, TrackState
+from mvtrack.video.loop import NO_SCORES, HeldScores, RescueFn
 
 if TYPE_CHECKING:
     from mvtrack.detection.template import TemplateBank
 
 Image = NDArray[np.uint8]
 IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+_NO_UIDS = np.zeros(0, np.int64)
+_NO_VALUES = np.zeros(0, np.float64)
+
+
+def held_scores(
+    tracker: Any, tracks: TrackFrame, uids: IntArray, scores: FloatArray
+) -> HeldScores:
+    """The rows of ``tracks`` in state ``STOPPED`` with the score of their accepted match.
+
+    Parameters
+    ----------
+    tracker : mvtrack.tracking.Tracker
+        Its ``row_uids`` (row-aligned with ``tracks``) give each row's internal uid; a
+        tracker without them is looked up through ``tracker.tracks`` by public ID.
+    tracks : TrackFrame
+        The tracker's output of this frame.
+    uids, scores : (K,) arrays
+        The uids of the matches accepted this frame and their NCC.
+
+    Returns
+    -------
+    HeldScores
+        ``(track_id, score)`` of the stopped rows whose uid is among ``uids``.
+    """
+    stopped = np.flatnonzero(tracks.state == int(TrackState.STOPPED))
+    if stopped.size == 0 or uids.size == 0:
+        return NO_SCORES
+    ids = tracks.track_id[stopped]
+    row_uids = getattr(tracker, "row_uids", None)
+    if row_uids is not None and len(row_uids) == len(tracks):
+        row_uid = np.asarray(row_uids, np.int64)[stopped]
+    else:
+        row_uid = _uids_of_ids(tracker.tracks, ids)
+    order = np.argsort(uids, kind="stable")
+    pos = np.minimum(np.searchsorted(uids[order], row_uid), uids.size - 1)
+    ok = uids[order][pos] == row_uid
+    # an NCC is at most 1; float32 sums can round a perfect match a hair above
+    return HeldScores(ids[ok], np.minimum(scores[order][pos][ok], 1.0))
+
+
+def _uids_of_ids(table: Any, ids: IntArray) -> IntArray:
+    """Internal uid of each public ID in ``ids`` through a track table (−1: unknown)."""
+    t_uid = np.asarray(table.uid, np.int64)
+    t_id = np.asarray(table.track_id, np.int64)
+    if not (t_id.size and ids.size):
+        return np.full(ids.size, -1, np.int64)
+    order = np.argsort(t_id, kind="stable")
+    pos = np.minimum(np.searchsorted(t_id[order], ids), t_id.size - 1)
+    return np.where(t_id[order][pos] == ids, t_uid[order][pos], -1)
 
 
 class StoppedVehicleRescuer:
@@ -55,6 +110,12 @@ class StoppedVehicleRescuer:
         Its ``tracks`` table gives each uid's last measurement.
     max_shift : float
         Largest distance (px) between the match and the last measured position.
+
+    Attributes
+    ----------
+    held_scores : HeldScores
+        After :meth:`observe`: the public ID of each row of the frame held by template
+        matching (state ``STOPPED``) and the NCC score of its accepted match.
     """
 
     #: default ``max_shift`` in px
@@ -68,13 +129,19 @@ class StoppedVehicleRescuer:
         self.inner = inner
         self.tracker = tracker
         self.max_shift = float(max_shift)
+        self.held_scores: HeldScores = NO_SCORES
+        self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
 
     def callback(self, image: Image, dets: Detections) -> RescueFn:
-        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for this frame."""
+        """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for this frame.
+
+        The NCC scores of the matches it accepts are kept for :meth:`observe`.
+        """
         tab = self.tracker.tracks
+        self._accepted = (_NO_UIDS, _NO_VALUES)  # the tracker may not call it this frame
 
         def rescue(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any]:
-            search = self.inner.callback(image)  # only on frames with missed tracks
+            search = self.inner.search(image)  # only on frames with missed tracks
             uids = np.asarray(uids, np.int64).reshape(-1)
             # a stopped vehicle stands where it was last measured: search around that place,
             # not around the prediction, which keeps drifting with the last velocity estimate
@@ -82,12 +149,12 @@ class StoppedVehicleRescuer:
             at = order[np.searchsorted(tab.uid[order], uids)]
             last = tab.last_xy[at]
             centre = self._centres(uids, last)
-            found, xy = self._search(search, uids, centre, wh)
+            found, xy, score = self._search(search, uids, centre, wh)
             # not at its template's place: where it was last measured
             again = ~found & (centre != last).any(axis=1)
             if again.any():
-                f2, xy2 = self._search(search, uids[again], last[again], wh[again])
-                found[again], xy[again] = f2, xy2
+                f2, xy2, s2 = self._search(search, uids[again], last[again], wh[again])
+                found[again], xy[again], score[again] = f2, xy2, s2
             if not found.any():
                 return found, xy
             # and no detection of about its size may cover it (a detected object has not
@@ -100,21 +167,24 @@ class StoppedVehicleRescuer:
                 merged = dets.wh.prod(axis=1)[None, :] > self.MERGED * area[:, None]
                 found &= ~(inside & ~merged).any(axis=1)
             xy[~found] = np.nan
+            self._accepted = (uids[found], score[found])
             return found, xy
 
         return rescue
 
     def _search(
         self, search: RescueFn, uids: IntArray, centre: NDArray[np.float64], wh: Any
-    ) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
-        """NCC search around ``centre``; matches farther than ``max_shift`` from it refused."""
-        f_sub, xy_sub = search(uids, centre, wh)
+    ) -> tuple[NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]]:
+        """NCC search around ``centre``; matches farther than ``max_shift`` from it refused.
+        Returns ``found``, ``xy`` and the NCC ``score`` of each track."""
+        f_sub, xy_sub, s_sub = search(uids, centre, wh)
         found = np.array(f_sub, bool)
         xy = np.array(xy_sub, np.float64)
+        score = np.array(s_sub, np.float64)
         if found.any():  # the match must sit where the vehicle was last seen (it stands)
             d = xy - centre
             found &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
-        return found, xy
+        return found, xy, score
 
     def _centres(self, uids: IntArray, last: NDArray[np.float64]) -> NDArray[np.float64]:
         """Where each missed track's vehicle was last seen: the centre of its template's box
@@ -138,8 +208,9 @@ class StoppedVehicleRescuer:
         return np.where(inside[:, None], box[:, :2], last)
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
-        """Feed the template bank."""
+        """Feed the template bank; set :attr:`held_scores` for this frame's rows."""
         self.inner.observe(image, dets, tracks)
+        self.held_scores = held_scores(self.tracker, tracks, *self._accepted)
 
 
 def gate_radius_of(tracker: Any, default: float) -> float:
@@ -186,6 +257,12 @@ class TemplateRescuer:
         is wider. For a caller that accepts only matches this close (the pipeline's
         ``max_shift`` around a stopped vehicle's last position) the rest of the gate is
         wasted work: an NCC over a 20 px gate costs (2·20 + 1)² placements, over 4 px 9².
+
+    Attributes
+    ----------
+    held_scores : HeldScores
+        After :meth:`observe`: the public ID of each row of the frame held by a match of
+        :meth:`callback` (state ``STOPPED``) and the NCC score of that match.
     """
 
     def __init__(
@@ -204,6 +281,8 @@ class TemplateRescuer:
         self._radius = gate_radius
         self.max_radius = None if max_radius is None else float(max_radius)
         self._tracker_radius: tuple[Any, float] | None = None  # (tracker, its gate radius)
+        self.held_scores: HeldScores = NO_SCORES
+        self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
 
     def attach(self, tracker: Any) -> None:
         """Use ``tracker`` (and forget templates of any previous one)."""
@@ -222,9 +301,29 @@ class TemplateRescuer:
             r = self._tracker_radius[1]
         return r if self.max_radius is None else min(r, self.max_radius)
 
+    def search(self, frame: Image) -> RescueFn:
+        """``search(uids, predicted_xy, wh) -> (found, xy, score)`` on ``frame``: the bank's
+        NCC search in the gate (:meth:`TemplateBank.rescue`), with the best NCC of each track
+        (NaN where it was not searched)."""
+        bank, radius = self.bank, self.gate_radius
+
+        def search(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any, Any]:
+            return bank.rescue(frame, uids, predicted_xy, wh, radius)
+
+        return search
+
     def callback(self, frame: Image) -> RescueFn:
-        """The ``rescue`` argument of ``tracker.step`` for ``frame``."""
-        return self.bank.bind(frame, self.gate_radius)
+        """The ``rescue`` argument of ``tracker.step`` for ``frame``; the NCC scores of the
+        matches it finds are kept for :meth:`observe`."""
+        search = self.search(frame)
+        self._accepted = (_NO_UIDS, _NO_VALUES)
+
+        def rescue(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any]:
+            found, xy, score = search(uids, predicted_xy, wh)
+            self._accepted = (np.asarray(uids, np.int64).reshape(-1)[found], score[found])
+            return found, xy
+
+        return rescue
 
     def observe(self, frame: Image, dets: Detections, tracks: TrackFrame) -> None:
         """Record the detected boxes of this frame's tracks; forget deleted tracks.
@@ -252,16 +351,10 @@ class TemplateRescuer:
             self.bank.retain(table.uid)
         mask = getattr(self.detector, "mask", None) if self.detector is not None else None
         self.bank.observe(frame, uids, dets.xy[d], dets.wh[d], mask)
+        self.held_scores = held_scores(self.tracker, tracks, *self._accepted)
 
     def _uids_by_id(self, ids: IntArray, det: IntArray) -> tuple[IntArray, IntArray]:
         """Internal uids of public ``ids`` through ``tracker.tracks`` (unknown ones dropped)."""
-        table = self.tracker.tracks
-        t_uid = np.asarray(table.uid, np.int64)
-        t_id = np.asarray(table.track_id, np.int64)
-        if not (t_id.size and ids.size):
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        order = np.argsort(t_id, kind="stable")
-        sorted_ids = t_id[order]
-        pos = np.minimum(np.searchsorted(sorted_ids, ids), t_id.size - 1)
-        ok = sorted_ids[pos] == ids
-        return t_uid[order][pos][ok], det[ok]
+        uids = _uids_of_ids(self.tracker.tracks, ids)
+        known = uids >= 0
+        return uids[known], det[known]

@@ -3,7 +3,9 @@
 :func:`track_video` is what ``mvtrack track`` and each job of ``mvtrack batch`` run: it opens
 the source, fills in the size-dependent settings (:mod:`mvtrack.video.settings`), builds the
 parts (:mod:`mvtrack.video.build`) and calls :func:`track_to_folder`, which runs the frame loop
-(:func:`mvtrack.video.loop.run_frames`) and writes the files.
+(:func:`mvtrack.video.loop.run_frames`) and writes the files. Both then call
+:func:`write_tables`, which adds the tables computed from the whole run (``states.csv``, and
+the analytics files), so a batch folder holds the files of a ``track`` folder.
 """
 
 from __future__ import annotations
@@ -123,7 +125,7 @@ def track_to_folder(
 
     from mvtrack.io.atomic import atomic_path, write_json
     from mvtrack.tracking import TrackLog
-    from mvtrack.video.loop import flags_of
+    from mvtrack.video.loop import flags_of, scores_of
     from mvtrack.video.stream import StreamingOutput
     from mvtrack.viz.annotate import TrailBuffer, annotate_frame
     from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
@@ -175,7 +177,7 @@ def track_to_folder(
             if stream is None:
                 log.append(tracks)
             else:
-                stream.add(tracks, flags_of(detector, len(dets)))
+                stream.add(tracks, flags_of(detector, len(dets)), scores_of(rescuer))
             if k == 0:
                 background.append(image.copy())
             shot = snapshot is not None and k == snapshot
@@ -264,6 +266,54 @@ def track_to_folder(
     summary["files"]["summary"] = "summary.json"
     write_json(paths["summary"], summary)
     return RunOutput(result, log, summary, paths)
+
+
+def write_tables(
+    run: RunOutput, out: str | os.PathLike[str], settings: RunSettings, *,
+    fps: float | None = None,
+) -> dict[str, Path]:
+    """Write the tables of a finished run into its folder ``out``; returns their paths.
+
+    - ``states.csv`` (:func:`mvtrack.analytics.outputs.states_table`: every row's state, its
+      evidence, the template score of the rows held by template matching, speed, blob),
+      unless the run streamed it (``--flush``: it is in ``run.paths`` already);
+    - with an ``[analytics]`` table in ``settings`` and a source that did not fail:
+      ``counts.csv``, ``movements.csv``, ``speeds.csv`` and ``tracks.csv``
+      (:func:`mvtrack.analytics.analyse_folder` of ``results.txt``).
+
+    What ``mvtrack track`` and each job of ``mvtrack batch`` run after :func:`track_video`.
+
+    Parameters
+    ----------
+    run : RunOutput
+        What :func:`track_to_folder` returned.
+    out : path
+        The run's output folder.
+    settings : RunSettings
+        The run's settings (only ``analytics`` is read).
+    fps : float, optional
+        Frame rate to assume for the analytics (default: the ``[analytics]`` table's
+        ``fps``, else the video's, from ``summary.json``).
+
+    Returns
+    -------
+    dict of str to Path
+        ``states`` (when written here) and the analytics tables, by name.
+    """
+    from mvtrack.analytics.outputs import states_table, write_outputs, write_table
+
+    out = Path(out)
+    res = run.result
+    paths: dict[str, Path] = {}
+    if "states" not in run.paths:  # a streaming run wrote it as it went
+        paths["states"] = write_table(out / "states.csv",
+                                      states_table(run.log, res.flags, res.scores))
+    if settings.analytics is not None and res.error is None:
+        from mvtrack.analytics import analyse_folder, settings_from_dict
+
+        scene = settings_from_dict(settings.analytics, "[analytics]")
+        paths.update(write_outputs(analyse_folder(out, scene, fps), out))
+    return paths
 
 
 def _config_dict(config: Any) -> dict[str, Any]:

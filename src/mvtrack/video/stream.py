@@ -9,8 +9,9 @@ it is tracked, and :class:`StreamingOutput` appends it to the output folder at t
   (:func:`mvtrack.analytics.outputs.states_table`), each batch as whole lines in one write,
   then ``fsync`` (:class:`mvtrack.io.stream.LineAppender`): both files are valid at every
   moment, and at the end of the run they are byte for byte those of a run without streaming;
-- the track log (:class:`mvtrack.tracking.TrackLog`) and the detections' blob flags then
-  release the frames written, so memory stays flat on an endless stream;
+- the track log (:class:`mvtrack.tracking.TrackLog`), the detections' blob flags and the
+  template scores of the held rows then release the frames written, so memory stays flat on
+  an endless stream;
 - the summary's figures (tracks, their lengths, the states histogram) are kept as running
   counts (:class:`TrackStats`): the same numbers as without streaming, in memory that grows
   with the tracks alive and the distinct track lengths, not with the frames;
@@ -41,6 +42,7 @@ from mvtrack.io.mot import format_rows
 from mvtrack.io.stream import LineAppender
 from mvtrack.tracking.log import TrackLog
 from mvtrack.types import TrackFrame, TrackState
+from mvtrack.video.loop import NO_SCORES, HeldScores
 
 IntArray = NDArray[np.int64]
 
@@ -169,18 +171,19 @@ class RecentRows:
         return TrackRows(c["frame"], c["track_id"], c["state"], c["filtered_xy"], c["wh"])
 
 
-class _FrameFlags:
-    """The blob flags of frames ``first .. first + len(flags) - 1``, indexed by frame number
-    (what :func:`~mvtrack.analytics.outputs.states_table` looks them up by)."""
+class _FrameItems:
+    """Per-frame items (blob flags, template scores) of frames ``first .. first + len(items)
+    - 1``, indexed by frame number (what :func:`~mvtrack.analytics.outputs.states_table`
+    looks them up by)."""
 
-    def __init__(self, first: int, flags: list[NDArray[np.int8]]) -> None:
-        self.first, self.flags = first, flags
+    def __init__(self, first: int, items: list[Any]) -> None:
+        self.first, self.items = first, items
 
     def __len__(self) -> int:
-        return self.first + len(self.flags)
+        return self.first + len(self.items)
 
-    def __getitem__(self, f: int) -> NDArray[np.int8]:
-        return self.flags[f - self.first]
+    def __getitem__(self, f: int) -> Any:
+        return self.items[f - self.first]
 
 
 class StreamingOutput:
@@ -226,6 +229,7 @@ class StreamingOutput:
         self.recent = RecentRows(history)
         self.flushes = 0  #: flushes that wrote rows
         self._flags: list[NDArray[np.int8]] = []
+        self._scores: list[HeldScores] = []
         self._clock = clock
         self._due = clock() + self.interval
 
@@ -234,10 +238,14 @@ class StreamingOutput:
         """``{"results": ..., "states": ...}``."""
         return {"results": self.results.path, "states": self.states.path}
 
-    def add(self, tracks: TrackFrame, flags: NDArray[np.int8]) -> None:
-        """One more frame (its rows and its detections' blob flags); flush when due."""
+    def add(
+        self, tracks: TrackFrame, flags: NDArray[np.int8], scores: HeldScores = NO_SCORES
+    ) -> None:
+        """One more frame (its rows, its detections' blob flags and the template scores of
+        its held rows, :func:`~mvtrack.video.loop.scores_of`); flush when due."""
         self.log.append(tracks)
         self._flags.append(flags)
+        self._scores.append(scores)
         if self._clock() >= self._due:
             self.flush()
 
@@ -256,12 +264,14 @@ class StreamingOutput:
             self.stats.add(cols["frame"], cols["track_id"], cols["state"], now)
             self.recent.add(cols, now)
             results = format_rows(self.log.to_mot(include_coasting=False), "results")
-            table = states_table(self.log, _FrameFlags(first, self._flags))
+            table = states_table(self.log, _FrameItems(first, self._flags),
+                                 _FrameItems(first, self._scores))
             states = table_csv(table).split("\n", 1)[1] if len(table["frame"]) else ""
             self.results.append(results)
             self.states.append(states)
             self.log.release()
             self._flags = []
+            self._scores = []
             self.flushes += 1
 
     def close(self) -> None:
