@@ -42,10 +42,13 @@ def main() -> None:
         truth = truth_movement_counts(sc.meta["origin"], sc.meta["destination"])
         queued = [i + 1 for i, c in enumerate(sc.category) if c == "queue"]
         for name in args.trackers.split(","):
-            if name == "default":
+            base, _, extra = name.partition("+")  # "NAME+split": blobs split by the tracks
+            if base == "default":
                 cfg, blobs = default_config(sc), pipeline_blob_params(sc.size)
             else:
-                cfg, blobs = paper1(name, fps=sc.fps, gate_px=20.0), spec_blobs
+                cfg, blobs = paper1(base, fps=sc.fps, gate_px=20.0), dict(spec_blobs)
+            if extra == "split":
+                blobs = {**blobs, "track_split": True}
             run = track_scene(sc, cfg, seed=seed, frames=frames, detector_params=blobs)
             share = {}
             for v in range(1, sc.n_objects + 1):  # a dozen vehicles

@@ -16,7 +16,7 @@ DETECTORS: dict[str, type[Any]] = {
 }
 
 
-def make_detector(name: str, **params: Any) -> FrontEnd:
+def make_detector(name: str, **params: Any) -> Any:
     """A detection front end by name, with its parameters as keywords.
 
     Parameters
@@ -27,7 +27,9 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
         k-nearest-neighbours subtractor) or ``"hog"`` (OpenCV's HOG people detector over the
         whole frame; no background model).
     **params
-        Constructor parameters of the class (see :class:`DisturbanceMap`,
+        ``track_split=True`` (background-model front ends): blobs split and merged by the
+        tracker's predicted boxes (:class:`~mvtrack.detection.tracksplit.TrackSplit`). The
+        others are constructor parameters of the class (see :class:`DisturbanceMap`,
         :class:`FrameDifference`, :class:`MOG2`, :class:`KNN`,
         :class:`~mvtrack.detection.hog.HOGDetector`);
         names use underscores (``min_area``). The blob stage's parameters
@@ -41,6 +43,11 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
     """
     registry.check("detector", name, DETECTORS)
     cls = DETECTORS[name]
+    split = params.pop("track_split", False)
+    if not isinstance(split, bool):
+        raise ValueError(f"detector {name!r}: track_split must be true or false, got {split!r}")
+    if split and not issubclass(cls, FrontEnd):
+        raise ValueError(f"detector {name!r}: track_split needs a background-model front end")
     known = {
         p.name for p in inspect.signature(cls).parameters.values() if p.kind != p.VAR_KEYWORD
     }
@@ -53,6 +60,11 @@ def make_detector(name: str, **params: Any) -> FrontEnd:
             f"(known: {', '.join(sorted(known))})"
         )
     try:
-        return cls(**params)
+        det = cls(**params)
     except TypeError as exc:
         raise ValueError(f"detector {name!r}: {exc}") from None
+    if split:
+        from mvtrack.detection.tracksplit import TrackSplit
+
+        return TrackSplit(det)
+    return det
