@@ -476,3 +476,53 @@ def test_size_gate_must_be_a_ratio_above_one() -> None:
     with pytest.raises(ValueError, match="size_gate"):
         TrackerConfig(size_gate=1.0)
     assert TrackerConfig(size_gate=None).size_gate is None
+
+
+@pytest.mark.parametrize("margin", [4.0, None])
+def test_a_standing_track_is_not_carried_off_by_a_vehicle_passing_within_its_gate(margin):
+    """Paper 1's non-exclusive nearest rule: a vehicle stands (held by template matching)
+    while another passes 16 px from it, inside the 20 px gate. With ``stopped_margin`` the
+    standing track keeps to the place it stands (the passer is beyond half a box + 4 px, 14 px,
+    and its box ends 6 px from it) and
+    stays STOPPED; without it the standing track takes the passer's detection."""
+    n = 40
+    stand = np.tile([100.0, 100.0], (n, 1))
+    seen = np.full(n, np.nan)[:, None] * np.ones(2)
+    seen[:10] = stand[:10]  # detected, then faded into the background
+    passer = np.full((n, 2), np.nan)
+    passer[20:30] = [116.0, 100.0] + np.arange(10)[:, None] * [0.0, 0.5]  # 16 px away, slow
+    frames = _frames({0: seen, 1: passer}, n)
+
+    def rescue(uids, xy, wh):
+        return np.ones(len(uids), bool), np.repeat(stand[:1], len(uids), axis=0)
+
+    config = paper1("kalman-ca", fps=30.0).replace(stopped_margin=margin)
+    tracker = Tracker(config)
+    out = [tracker.step(d, rescue=rescue) for d in frames]
+    first = out[20]  # the passer's first frame
+    row = first.track_id.tolist().index(1)
+    if margin is None:
+        assert first.det_index[row] >= 0  # the standing track took the passer
+        assert np.hypot(*(first.filtered_xy[row] - stand[0])) > 5
+    else:
+        assert first.det_index[row] == -1 and first.state[row] == TrackState.STOPPED
+        for tf in out[20:30]:  # held where it stands all through the passing
+            r = tf.track_id.tolist().index(1)
+            assert tf.state[r] == TrackState.STOPPED
+            np.testing.assert_allclose(tf.measured_xy[r], stand[0])
+        assert 2 in out[20].track_id.tolist()  # the passer has a track of its own
+
+
+def test_a_standing_track_takes_a_blob_that_holds_the_place_it_stands():
+    """A queue that drives on merges into one wide blob whose centre lies between the
+    vehicles: the standing track may take it (the blob's box holds where it stands)."""
+    stand = np.array([100.0, 100.0])
+    tracker = Tracker(paper1("kalman-ca", fps=30.0))
+    for k in range(8):
+        tracker.step(Detections(k, stand[None], WH.copy()) if k < 5 else
+                     Detections.empty(k), rescue=lambda u, xy, wh: (
+                         np.ones(len(u), bool), np.repeat(stand[None], len(u), axis=0)))
+    assert tracker.tracks.state.tolist() == [int(TrackState.STOPPED)]
+    merged = Detections(8, np.array([[118.0, 100.0]]), np.array([[44.0, 10.0]]))  # centre 18 px off
+    tf = tracker.step(merged)
+    assert tf.det_index.tolist() == [0] and tf.track_id.tolist() == [1]

@@ -76,11 +76,13 @@ sub-pixel camera jitter a standing vehicle's NCC against a one-frame template fe
 0.66–0.79 in some frames (0.9–1.0 in others). The rescuer now searches at the template's box
 first (within one box length of the last measurement), then at the last measurement, and
 template and window are smoothed by a 1 px Gaussian before the NCC (a departure from the bare
-NCC of SPEC §1.1 [R]; the threshold stays 0.8). The vehicle-runs still lost are the
-association's: a track on a standing, faded vehicle takes the blob of a vehicle passing within
-its 20 px gate (non-exclusive nearest) and leaves with it, or its template is refreshed from
-such a blob; tracks born on the fragments during the wait have never travelled and are not
-searched. With the pipeline's blob stage
+NCC of SPEC §1.1 [R]; the threshold stays 0.8). The vehicle-runs lost after that were the
+association's: a track on a standing, faded vehicle took the blob of a vehicle passing within
+its 20 px gate (non-exclusive nearest) and left with it (traced: seed 1, frames 240–243, a
+left-turner passing 20–30 px away). So a track held by template matching in the previous frame
+now takes only a detection whose centre lies within half its box's longer side plus 4 px of
+where it stands, or whose box comes within 4 px of it (`stopped_margin`, ours, set by the
+paper presets). With the pipeline's blob stage
 {summary['kalman-ca, pipeline blobs']['stopped_rows']} rows (KF) are held by templates; with
 the modern default {summary['default']['stopped_rows']}, and it keeps
 {fmt_rate(summary['default']['waiting_keep_id'])} of the waiting vehicles.

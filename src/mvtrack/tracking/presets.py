@@ -13,7 +13,9 @@ __all__ = ["PRESETS", "default", "paper1", "paper2", "preset"]
 #: what both paper presets share: R = 4 px² (SPEC §2.1 [R]), the predictors' own priors, no
 #: recovery stage, no scaling with the box size or size gate, every detection used whatever
 #: its score (the papers' detections have none), paper 1's warm-up gate centre
-#: until 2M = 6 associations
+#: until 2M = 6 associations; and ours, not the papers': a track held by template matching
+#: takes only detections at the place it stands (``stopped_margin``), so that a vehicle
+#: passing within the gate does not carry a standing vehicle's track off (X5)
 _PAPER_COMMON: dict[str, Any] = {
     "size_ref": None,
     "coast_output": None,
@@ -22,6 +24,7 @@ _PAPER_COMMON: dict[str, Any] = {
     "init_velocity_std": None,
     "accel_std": None,
     "recover_speed": None,
+    "stopped_margin": 4.0,
     "second_gate": None,
     "size_gate": None,
     "score_high": None,

@@ -39,7 +39,7 @@ from mvtrack.association.gating import candidate_pairs
 from mvtrack.association.regions import SHAPE_PARAMS, GateRegions, axis_shapes, gate_shapes
 from mvtrack.filters.cv import KalmanCVPredictor
 from mvtrack.tracking.config import TrackerConfig
-from mvtrack.tracking.lifecycle import TENTATIVE
+from mvtrack.tracking.lifecycle import STOPPED, TENTATIVE
 from mvtrack.tracking.scores import ScoreCalibration, duplicates
 from mvtrack.tracking.table import HITS, LAST_K, LAST_XY, STATE, WH, TrackTable
 from mvtrack.types import Detections
@@ -167,7 +167,47 @@ class Associator:
             if mt2.size:
                 det_index[mt2] = md2
                 matched += mt2.size
+        if self.config.stopped_margin is not None and matched:
+            matched, ud, recovered = self._standing(tab, det_index, drow, matched, ud,
+                                                    recovered, sel)
         return det_index, matched, ud, recovered
+
+    def _standing(
+        self, tab: TrackTable, det_index: IntArray, drow: FloatArray, matched: int,
+        ud: NDArray[np.intp], recovered: NDArray[np.intp] | None,
+        sel: tuple[NDArray[np.intp], NDArray[np.intp]] | None,
+    ) -> tuple[int, NDArray[np.intp], NDArray[np.intp] | None]:
+        """Undo the matches of the tracks held by template matching in the previous frame
+        (``STOPPED``) to detections whose centre lies farther than half the track's box's
+        longer side plus ``stopped_margin`` from its last measurement and whose box does not
+        come within ``stopped_margin`` of it (``det_index`` in place); a detection
+        freed so, if high and taken by no other track, is unassigned again. Returns the new
+        ``matched``, ``ud`` and ``recovered``."""
+        rows = ((tab.ints[:, STATE] == STOPPED) & (det_index >= 0)).nonzero()[0]
+        if rows.size == 0:
+            return matched, ud, recovered
+        flo = tab.floats.take(rows, 0)
+        box = drow.take(det_index.take(rows), 0)
+        margin = self.config.stopped_margin
+        d = box[:, :2] - flo[:, LAST_XY]
+        reach = flo[:, WH].max(axis=1) / 2 + margin
+        # or the detection's box holds where it stands (vehicles of a queue that drive on
+        # together merge into one blob whose centre lies between them)
+        out = np.maximum(np.abs(d) - box[:, 2:] / 2, 0.0)
+        far = rows[(np.hypot(d[:, 0], d[:, 1]) > reach) & (np.hypot(out[:, 0], out[:, 1]) > margin)]
+        if far.size == 0:
+            return matched, ud, recovered
+        freed = det_index[far]
+        det_index[far] = -1
+        freed = freed[~np.isin(freed, det_index)]  # non-exclusive rules may share a detection
+        if sel is not None:
+            freed = freed[np.isin(freed, sel[0])]  # a low detection starts nothing
+        if freed.size:
+            ud = np.union1d(ud, freed).astype(np.intp)
+        if recovered is not None:
+            recovered = recovered[~np.isin(recovered, far)]
+            recovered = recovered if recovered.size else None
+        return matched - far.size, ud, recovered
 
     def score_select(self, dets: Detections) -> tuple[NDArray[np.intp], NDArray[np.intp]] | None:
         """The high and the low detections (rows of ``dets``) by calibrated score, without
