@@ -8,6 +8,9 @@ its ID when one track follows it in ≥ 99 % of them), the movement counts again
 and the crossings of the stop line (truth: 10 eastbound).
 
     python benchmarks/bench_queue.py [--seeds 0,1,2] [--trackers default,kalman-ca,rls]
+
+A tracker name may carry front-end options: ``default+split`` (``track_split``),
+``default+ghosts`` (the disturbance map's ``ghost_every = 5``), ``default+split+ghosts``.
 """
 
 from __future__ import annotations
@@ -42,13 +45,15 @@ def main() -> None:
         truth = truth_movement_counts(sc.meta["origin"], sc.meta["destination"])
         queued = [i + 1 for i, c in enumerate(sc.category) if c == "queue"]
         for name in args.trackers.split(","):
-            base, _, extra = name.partition("+")  # "NAME+split": blobs split by the tracks
+            base, *extras = name.split("+")  # "NAME+split+ghosts": front-end options on
             if base == "default":
                 cfg, blobs = default_config(sc), pipeline_blob_params(sc.size)
             else:
                 cfg, blobs = paper1(base, fps=sc.fps, gate_px=20.0), dict(spec_blobs)
-            if extra == "split":
+            if "split" in extras:  # blobs split by the tracks' predicted boxes
                 blobs = {**blobs, "track_split": True}
+            if "ghosts" in extras:  # the disturbance map's ghosts reset to the frame
+                blobs = {**blobs, "ghost_every": 5}
             run = track_scene(sc, cfg, seed=seed, frames=frames, detector_params=blobs)
             share = {}
             for v in range(1, sc.n_objects + 1):  # a dozen vehicles

@@ -50,6 +50,12 @@ class DisturbanceMap(FrontEnd):
         Floor of the learning rate :math:`\beta_k` (SPEC §1.1 [R]).
     warmup : int, default 0
         Frames after a reset whose detections are suppressed.
+    ghost_every : int, default 0
+        Not in paper 1. Test the foreground blobs for ghosts every this many frames (0 never;
+        :func:`~mvtrack.detection.ghosts.ghost_blobs`: an outline with the background's edges
+        and not the frame's, the place a vehicle that stood long enough to be absorbed has
+        left) and reset their pixels of :math:`B` to the frame, so the vehicle's track follows
+        the vehicle, not the place it stood.
     **blob
         The blob stage's keywords ``min_area, max_area, open_size, close_size, connectivity,
         center``, see :class:`~mvtrack.detection.blobs.BlobExtractor` (defaults 20, None, 3,
@@ -71,13 +77,18 @@ class DisturbanceMap(FrontEnd):
         beta_min: float = 0.02,
         *,
         warmup: int = 0,
+        ghost_every: int = 0,
         **blob: Any,
     ) -> None:
         if not (0.0 < beta_min <= 1.0):
             raise ValueError(f"beta_min must be in (0, 1], got {beta_min}")
+        if isinstance(ghost_every, bool) or not isinstance(ghost_every, int) or ghost_every < 0:
+            raise ValueError(f"ghost_every must be a whole number of frames >= 0, got "
+                             f"{ghost_every!r}")
         super().__init__(BlobExtractor(**blob), warmup)
         self.threshold = _check_threshold(threshold)
         self.beta_min = float(beta_min)
+        self.ghost_every = ghost_every
         self._reset_model()
 
     def _reset_model(self) -> None:
@@ -117,9 +128,28 @@ class DisturbanceMap(FrontEnd):
         if self._thr[0, 0] != np.float32(self.threshold):  # T changed since the reset
             self._thr.fill(self.threshold)
         cv2.compare(d, self._thr, cv2.CMP_GT, dst=self._fg)  # |D_k| > T
+        if self.ghost_every and k % self.ghost_every == 0:
+            self._remove_ghosts(grey)  # not in paper 1: ghosts reset to the frame there
         # B_k = (1 − β_k) B_{k−1} + β_k I_k, β_k = max(1/(k+1), β_min)  (SPEC §1.1 [R])
         cv2.accumulateWeighted(grey, self.background, self.beta(k))
         return self._fg
+
+
+    def _remove_ghosts(self, grey: NDArray[np.uint8]) -> None:
+        """Reset the pixels of the ghost blobs of the raw mask to the frame (option
+        ``ghost_every``); they leave the mask."""
+        from mvtrack.detection.ghosts import ghost_blobs
+
+        n, labels = cv2.connectedComponents(self._fg, connectivity=8)
+        if n <= 1:
+            return
+        bg = cv2.convertScaleAbs(self.background)  # B_{k-1} as uint8
+        ghost = ghost_blobs(labels, n, grey, bg)
+        if not ghost.any():
+            return
+        sel = np.concatenate([[False], ghost])[labels]
+        self.background[sel] = grey[sel]
+        self._fg[sel] = 0
 
 
 class FrameDifference(FrontEnd):
