@@ -317,7 +317,9 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
 
     base = TrackerConfig()
     small = resolve_settings(RunSettings(detector=DM), (320, 240))
-    assert small.detector_params == {"min_area": 40.0, "close_size": 7}
+    assert small.detector_params == {"min_area": 40.0, "close_size": 7, "ghost_every": 5}
+    other = resolve_settings(RunSettings(detector="mog2"), (320, 240))
+    assert other.detector_params == {"min_area": 40.0, "close_size": 7}
     assert small.tracker == {"measurement_std": 2.0, "size_gate": None}  # blobs: no size gate
     big = resolve_settings(RunSettings(detector=DM), (640, 480))  # s² = 4
     assert big.detector_params["min_area"] == 160.0 and big.detector_params["close_size"] == 7

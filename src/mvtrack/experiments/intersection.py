@@ -86,8 +86,9 @@ def _settings(scene: Any) -> dict[str, dict[str, Any]]:
 
 
 VARIANTS = {
-    "pipeline blobs": "the blob stage `mvtrack track` uses (7×7 closing, area ≥ 40 px), which "
-    "merges the two tones of a vehicle into one blob; SPEC §1.1 [R] has no closing",
+    "pipeline blobs": "the disturbance map as `mvtrack track` runs it (7×7 closing, area ≥ 40 "
+    "px, which merges the two tones of a vehicle into one blob; ghosts tested every 5 "
+    "frames); SPEC §1.1 [R] has neither",
     f"NCC ≥ {LOOSE_NCC:g}": "under this scene's noise and sub-pixel jitter a standing vehicle's "
     "NCC against its last detected appearance hovers around 0.75–0.82",
     "no templates": "what template matching does for the waiting vehicles",

@@ -13,9 +13,7 @@ __all__ = ["PRESETS", "default", "paper1", "paper2", "preset"]
 #: what both paper presets share: R = 4 px² (SPEC §2.1 [R]), the predictors' own priors, no
 #: recovery stage, no scaling with the box size or size gate, every detection used whatever
 #: its score (the papers' detections have none), paper 1's warm-up gate centre
-#: until 2M = 6 associations; and ours, not the papers': a track held by template matching
-#: takes only detections at the place it stands (``stopped_margin``), so that a vehicle
-#: passing within the gate does not carry a standing vehicle's track off (X5)
+#: until 2M = 6 associations
 _PAPER_COMMON: dict[str, Any] = {
     "size_ref": None,
     "coast_output": None,
@@ -24,7 +22,6 @@ _PAPER_COMMON: dict[str, Any] = {
     "init_velocity_std": None,
     "accel_std": None,
     "recover_speed": None,
-    "stopped_margin": 4.0,
     "second_gate": None,
     "size_gate": None,
     "score_high": None,
@@ -57,6 +54,10 @@ def paper1(predictor: str = "kalman-ca", fps: float = 30.0, gate_px: float = 20.
         fps=fps,
         confirm_hits=1,
         max_coast=Frames(3),  # SPEC §1.1: 3 frames without a detection
+        # ours, not paper 1's: a track held by template matching takes only detections at the
+        # place it stands, so a vehicle passing within the gate does not carry a standing
+        # vehicle's track off (X5)
+        stopped_margin=4.0,
         **_PAPER_COMMON,
     )
 

@@ -37,6 +37,11 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
     - no size gate (``size_gate = None``): blobs merge and split, so the size of a blob's box
       says little about which object it is.
 
+    - for the disturbance map (not in paper 1): its ghosts tested every 5 frames
+      (``ghost_every = 5``), so a vehicle that stood keeps its track when it leaves
+      (``docs/video-pipeline.md``, measured on X5, X8, the stop-and-go queue and vtest.avi;
+      ``track_split`` stays off: it splits X8's walking group wrongly).
+
     The tracker values are only scaled up: images smaller than 320×240 keep them.
 
     The blob-stage defaults are for the front ends whose blobs are found at the frame's size;
@@ -51,6 +56,8 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
     if settings.detector not in OWN_BLOB_STAGE:
         det.setdefault("min_area", float(round(40.0 * s2)))
         det.setdefault("close_size", 7)
+    if settings.detector == "disturbance-map":
+        det.setdefault("ghost_every", 5)
     tracker = dict(settings.tracker)
     if tracker.get("preset", "default") == "default":
         # blobs merge and split (two vehicles in one blob, a person in two): a blob's box
