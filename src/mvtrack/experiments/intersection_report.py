@@ -82,7 +82,7 @@ its 20 px gate (non-exclusive nearest) and left with it (traced: seed 1, frames 
 left-turner passing 20–30 px away). So a track held by template matching in the previous frame
 now takes only a detection whose centre lies within half its box's longer side plus 4 px of
 where it stands, or whose box comes within 4 px of it (`stopped_margin`, ours, set by the
-paper presets). With the pipeline's blob stage
+`paper1` preset). With the pipeline's blob stage
 {summary['kalman-ca, pipeline blobs']['stopped_rows']} rows (KF) are held by templates; with
 the modern default {summary['default']['stopped_rows']}, and it keeps
 {fmt_rate(summary['default']['waiting_keep_id'])} of the waiting vehicles.

@@ -122,7 +122,7 @@ class TrackerConfig:
         its box's longer side plus this margin of where it stands (its last measurement), not
         anywhere in its gate: a vehicle passing close by does not carry it off, while the
         vehicle's own blob (its fragments, or its body when it drives on) stays within reach.
-        Not in paper 1; ``None`` (the default) disables it. The paper presets set 4 px: their
+        Not in paper 1; ``None`` (the default) disables it. The ``paper1`` preset sets 4 px: its
         non-exclusive nearest rule lets a passing vehicle take a standing vehicle's track
         (X5); with the default's exclusive assignment it costs IDs on the stop-and-go queue,
         where a vehicle that drives on leaves a ghost at the place it stood.
