@@ -60,7 +60,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.detection.ghosts import ghost_blobs
+from mvtrack.detection.ghosts import ghost_blobs, ghost_pixels
 from mvtrack.detection.shadows import channel_max, channel_sum, shadow_mask
 
 __all__ = [
@@ -292,15 +292,13 @@ class GaussianBackground:
         return mask
 
     def _remove_ghosts(self, img: Image, mask: Image, f: NDArray[np.float32]) -> None:
-        n, labels = cv2.connectedComponents(mask, connectivity=8)
-        if n <= 1:
+        if not mask.any():
             return
         grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
         bg = cv2.cvtColor(self.mean.astype(np.uint8), cv2.COLOR_BGR2GRAY)
-        ghost = ghost_blobs(labels, n, grey, bg)
-        if not ghost.any():
+        sel = ghost_pixels(mask, grey, bg)
+        if sel is None:
             return
-        sel = np.concatenate([[False], ghost])[labels]
         self.mean[sel] = f[sel]
         mask[sel] = 0
 

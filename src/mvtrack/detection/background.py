@@ -138,16 +138,11 @@ class DisturbanceMap(FrontEnd):
     def _remove_ghosts(self, grey: NDArray[np.uint8]) -> None:
         """Reset the pixels of the ghost blobs of the raw mask to the frame (option
         ``ghost_every``); they leave the mask."""
-        from mvtrack.detection.ghosts import ghost_blobs
+        from mvtrack.detection.ghosts import ghost_pixels
 
-        n, labels = cv2.connectedComponents(self._fg, connectivity=8)
-        if n <= 1:
+        sel = ghost_pixels(self._fg, grey, cv2.convertScaleAbs(self.background))  # B_{k-1}
+        if sel is None:
             return
-        bg = cv2.convertScaleAbs(self.background)  # B_{k-1} as uint8
-        ghost = ghost_blobs(labels, n, grey, bg)
-        if not ghost.any():
-            return
-        sel = np.concatenate([[False], ghost])[labels]
         self.background[sel] = grey[sel]
         self._fg[sel] = 0
 

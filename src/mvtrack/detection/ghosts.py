@@ -56,6 +56,20 @@ def ghost_blobs(
     return sb > ratio * si
 
 
+def ghost_pixels(
+    mask: Image, frame_grey: Image, background_grey: Image, ratio: float = 2.0
+) -> NDArray[np.bool_] | None:
+    """The pixels of the ghost blobs of a foreground ``mask`` (:func:`ghost_blobs` over its
+    8-connected components), or ``None`` when it has none."""
+    n, labels = cv2.connectedComponents(mask, connectivity=8)
+    if n <= 1:
+        return None
+    ghost = ghost_blobs(labels, n, frame_grey, background_grey, ratio)
+    if not ghost.any():
+        return None
+    return np.concatenate([[False], ghost])[labels]
+
+
 def _edges(grey: Image) -> NDArray[np.float32]:
     gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3)
