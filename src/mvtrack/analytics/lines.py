@@ -107,6 +107,19 @@ def sides(points: FloatArray, line: CountLine) -> IntArray:
     return np.where(d > line.hysteresis, 1, np.where(d < -line.hysteresis, -1, 0))
 
 
+def step_cuts(
+    q: FloatArray, p: FloatArray, dq: FloatArray, dp: FloatArray, line: CountLine
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Where the steps ``q → p`` (K, 2), whose ends lie on opposite sides of ``line`` at
+    signed distances ``dq``, ``dp``, cut it: the fraction ``u`` of the step, the point, and
+    whether it cuts the segment itself (not its extension)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = dq / (dq - dp)  # in [0, 1] for ends on opposite sides
+    cut = q + u[:, None] * (p - q)
+    s = along(cut, line.a, line.b)
+    return u, cut, (s >= 0.0) & (s <= 1.0)
+
+
 def line_crossings(tracks: TrackPoints, line: CountLine, anchor: str = "centre") -> Crossings:
     """Every crossing of ``line`` by ``tracks`` (module docstring).
 
@@ -135,10 +148,7 @@ def line_crossings(tracks: TrackPoints, line: CountLine, anchor: str = "centre")
     rows = np.flatnonzero(cand)
     q = prev[rows]
     d = signed_distance(p, line.a, line.b)
-    u = d[q] / (d[q] - d[rows])  # where the step q → row cuts the line, in [0, 1]
-    cut = p[q] + u[:, None] * (p[rows] - p[q])
-    s = along(cut, line.a, line.b)
-    on = (s >= 0.0) & (s <= 1.0)
+    u, cut, on = step_cuts(p[q], p[rows], d[q], d[rows], line)  # where the step q → row cuts
     rows, q, u, cut = rows[on], q[on], u[on], cut[on]
     frame = tracks.frame[q] + u * (tracks.frame[rows] - tracks.frame[q])
     return Crossings(tracks.track_id[rows], rows, frame, side[rows].astype(np.int64), cut)

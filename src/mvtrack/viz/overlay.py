@@ -25,7 +25,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.analytics.geometry import along, signed_distance
+from mvtrack.analytics.geometry import signed_distance
+from mvtrack.analytics.lines import sides, step_cuts
 from mvtrack.types import TrackFrame, TrackState
 from mvtrack.viz.scene import draw_scene, draw_speeds
 
@@ -52,9 +53,6 @@ class LiveAnalytics:
         self.settings = settings
         self.fps = float(fps)
         n_lines = len(settings.lines)
-        self._a = np.array([ln.a for ln in settings.lines], np.float64).reshape(n_lines, 2)
-        self._b = np.array([ln.b for ln in settings.lines], np.float64).reshape(n_lines, 2)
-        self._h = np.array([ln.hysteresis for ln in settings.lines], np.float64)
         #: crossings shown so far, (lines, 2): forward, backward
         self.total = np.zeros((n_lines, 2), np.int64)
         self._rows = np.zeros(0, np.int64)  # rows seen, by track ID
@@ -94,21 +92,16 @@ class LiveAnalytics:
         if ids.size:
             self._grow(int(ids.max()))
         self._rows[ids] += 1
-        p = xy + np.column_stack([np.zeros(ids.size), wh[:, 1] / 2]) if s.anchor == "foot" else xy
+        foot = xy + np.column_stack([np.zeros(ids.size), wh[:, 1] / 2])  # bottom centre
+        p = foot if s.anchor == "foot" else xy
         ready = self._rows[ids] >= s.min_frames
-        for j in range(self._a.shape[0]):  # a handful of lines, each over all rows
-            a, b = self._a[j], self._b[j]
-            d = signed_distance(p, a, b)
-            side = np.where(d > self._h[j], 1, np.where(d < -self._h[j], -1, 0)).astype(np.int8)
+        for j, line in enumerate(s.lines):  # a handful of lines, each over all rows
+            d = signed_distance(p, line.a, line.b)
+            side = sides(p, line).astype(np.int8)
             prev, q = self._side[ids, j], self._last[ids, j]
             cross = (side != 0) & (prev != 0) & (side != prev)
             if cross.any():
-                dq = signed_distance(q, a, b)
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    u = dq / (dq - d)
-                cut = q + u[:, None] * (p - q)
-                t = along(cut, a, b)
-                cross &= (t >= 0.0) & (t <= 1.0)
+                cross &= step_cuts(q, p, signed_distance(q, line.a, line.b), d, line)[2]
                 col = (side < 0).astype(np.int64)  # 0: forward (to the right), 1: backward
                 now = cross & ready
                 np.add.at(self.total[j], col[now], 1)
@@ -123,7 +116,7 @@ class LiveAnalytics:
             self.total += self._held[just].sum(axis=0)
             self._held[just] = 0
         self._occupancy = {z.name: int(np.count_nonzero(z.contains(p))) for z in s.zones}
-        self._now = (xy + np.column_stack([np.zeros(ids.size), wh[:, 1] / 2]),
+        self._now = (foot,
                      *self._speeds(p, tracks.velocity[keep]))
 
     def _speeds(self, p: FloatArray, v: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
