@@ -47,13 +47,15 @@ def main() -> None:
         for name in args.trackers.split(","):
             base, *extras = name.split("+")  # "NAME+split+ghosts": front-end options on
             if base == "default":
-                cfg, blobs = default_config(sc), pipeline_blob_params(sc.size)
+                cfg, blobs = default_config(sc), pipeline_blob_params(sc.size, sc.fps)
             else:
                 cfg, blobs = paper1(base, fps=sc.fps, gate_px=20.0), dict(spec_blobs)
             if "split" in extras:  # blobs split by the tracks' predicted boxes
                 blobs = {**blobs, "track_split": True}
             if "ghosts" in extras:  # the disturbance map's ghosts reset to the frame
                 blobs = {**blobs, "ghost_every": 5}
+            if "hold" in extras:  # tracked pixels kept out of the background for 60 s
+                blobs = {**blobs, "hold": round(60 * sc.fps)}
             run = track_scene(sc, cfg, seed=seed, frames=frames, detector_params=blobs)
             share = {}
             for v in range(1, sc.n_objects + 1):  # a dozen vehicles

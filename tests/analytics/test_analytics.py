@@ -19,6 +19,7 @@ from mvtrack.analytics import (
 )
 from mvtrack.analytics.accuracy import (
     count_errors,
+    line_counts,
     movement_counts,
     pair_with_truth,
     scene_points,
@@ -176,6 +177,34 @@ def test_queue_scene_counts_exact_from_true_tracks(seed):
     queued = np.asarray(res.tracks["stopped_s"])[:8]
     assert np.all(queued >= 5.0)
 
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_queue_scene_rendered_and_tracked_keeps_the_queued_ids_and_counts_exactly(seed):
+    """The stop-and-go queue through the pipeline's disturbance map (the pixels of tracked
+    vehicles held out of its background) and the default tracker: the queued vehicles keep
+    their IDs and the movements and stop-line crossings counted on the tracks are exact.
+    Without ``hold`` 2, 2 and 3 of the 8 queued vehicles keep one ID (bench_queue.py)."""
+    from mvtrack.experiments._video import default_config, pipeline_blob_params, track_scene
+    from mvtrack.sim.queue import queue_scene, queue_settings
+
+    sc = queue_scene(seed)
+    params = pipeline_blob_params(sc.size, sc.fps)
+    assert params["hold"] == 60 * 30
+    run = track_scene(sc, default_config(sc), seed=seed, detector_params=params)
+    queued = [i + 1 for i, c in enumerate(sc.category) if c == "queue"]
+    kept = 0
+    for v in queued:
+        fr = sc.frame[sc.visible & (sc.id == v)]
+        kept += run.match.followed_share(v, (int(fr.min()), int(fr.max()) + 1))[1] >= 0.99
+    # measured: 7, 8, 8 of 8 (seed 0: two queued vehicles 6 px apart merge into one blob as
+    # they leave the image, and the front one's track takes it for its last 16 frames)
+    assert kept >= 7
+    res = analyse(TrackPoints.from_log(run.log), settings_from_dict(queue_settings()), sc.fps,
+                  sc.n_frames)
+    truth = truth_movement_counts(sc.meta["origin"], sc.meta["destination"])
+    assert count_errors(movement_counts(res), truth)["total"]["abs_error"] == 0
+    assert line_counts(res) == {"stopline:eastbound": 10, "stopline:westbound": 0}
 
 def test_x5_waiting_and_turns_from_true_tracks():
     from mvtrack.sim.intersection import x5_intersection

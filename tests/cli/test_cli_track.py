@@ -84,6 +84,25 @@ def test_config_errors_name_the_key(tmp_path, text: str, needle: str) -> None:
         load_config(cfg)
 
 
+def test_detector_option_refuses_to_drop_the_configs_detector_parameters(tmp_path,
+                                                                        capsys) -> None:
+    video = _write_avi(tmp_path / "v.avi")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[detector]\ntrack_split = true\n")  # no name: the default, "scene"
+    out = tmp_path / "out"
+    args = ["track", str(video), "--out", str(out), "--config", str(cfg), "--no-video"]
+    assert main([*args, "--detector", "disturbance-map"]) == 2
+    err = _one_line_error(capsys)
+    assert "track_split" in err and "name = 'disturbance-map'" in err
+    assert not out.exists()
+    cfg.write_text('[detector]\nname = "disturbance-map"\ntrack_split = true\n')
+    assert main([*args, "--max-frames", "3"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["settings"]["detector_params"]["track_split"] is True
+    # the same name on the command line keeps them
+    assert main([*args, "--max-frames", "3", "--detector", "disturbance-map"]) == 0
+
+
 def test_config_values_are_read(tmp_path) -> None:
     cfg = tmp_path / "c.toml"
     cfg.write_text(

@@ -47,9 +47,12 @@ def test_states_csv_gives_each_stopped_row_its_template_score(tmp_path) -> None:
     scene = x5_intersection(0)
     frames = list(render_frames(scene, 0))
 
-    def states(name: str, flush: float | None = None, min_score: float | None = None):
+    def states(name: str, flush: float | None = None, min_score: float | None = None,
+               hold: int = 0):
         params = {} if min_score is None else {"min_score": min_score}
-        settings = RunSettings(detector="disturbance-map", video=False, template_params=params)
+        # hold 0: paper 1's running average, the waiting vehicles fade and templates hold them
+        settings = RunSettings(detector="disturbance-map", video=False, template_params=params,
+                               detector_params={"hold": hold})
         out = tmp_path / name
         run = track_to_folder(frames, fps=30.0, size=scene.size, settings=settings, out=out,
                               progress=False, flush=flush)
@@ -65,5 +68,21 @@ def test_states_csv_gives_each_stopped_row_its_template_score(tmp_path) -> None:
         value = score[stopped].astype(float)
         assert (value >= threshold).all() and (value <= 1.0).all(), (value.min(), value.max())
         assert (score[~stopped] == "").all()
+        motion = np.array(table["motion"])
+        # a held vehicle stands (measured 0.85: the first held rows still carry the speed of
+        # the deceleration in the filter)
+        assert (motion[stopped] == "stopped").mean() > 0.8
+    # the pipeline's default keeps the waiting vehicles' pixels out of the background: they
+    # stay blobs (state confirmed, evidence detection) and their rows say they stand
+    held = states("held", hold=1800)[0]
+    motion, state = np.array(held["motion"]), np.array(held["state"])
+    assert (state == "stopped").sum() < 20
+    standing = (motion == "stopped") & (state == "confirmed")
+    assert standing.sum() >= 300  # the two waits, ~7.5 s each at 30 fps
+    ids = np.array(held["id"]).astype(int)
+    # the two waiting vehicles; another track may read 0 on the row where it is confirmed
+    # (the filter's velocity is still its prior there)
+    assert np.isin(ids[standing], [1, 3]).sum() >= 300
+    assert (~np.isin(ids[standing], [1, 3])).sum() <= 3
     # streaming writes the scores of each flushed frame and then forgets them
     assert states("streamed", flush=1e-9)[1] == states("again")[1]

@@ -317,7 +317,10 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
 
     base = TrackerConfig()
     small = resolve_settings(RunSettings(detector=DM), (320, 240))
-    assert small.detector_params == {"min_area": 40.0, "close_size": 7, "ghost_every": 5}
+    assert small.detector_params == {"min_area": 40.0, "close_size": 7, "ghost_every": 5,
+                                     "hold": 1800}  # 60 s at the default 30 fps
+    slow = resolve_settings(RunSettings(detector=DM), (320, 240), fps=10.0)
+    assert slow.detector_params["hold"] == 600
     other = resolve_settings(RunSettings(detector="mog2"), (320, 240))
     assert other.detector_params == {"min_area": 40.0, "close_size": 7}
     assert small.tracker == {"measurement_std": 2.0, "size_gate": None}  # blobs: no size gate
@@ -391,8 +394,10 @@ def test_a_stopped_vehicle_keeps_its_id_by_template_matching(tmp_path) -> None:
 
     frames = _stop_video()
     a_xy, b_xy = (87.5, 44.5), (157.5, 89.5)  # where A stands from frame 40, where B stands
+    paper = {"hold": 0}  # paper 1's running average everywhere: A fades while it stands
     with_t = track_to_folder(frames, fps=30.0, size=(200, 120), out=tmp_path / "t",
-                             settings=RunSettings(video=False, detector=DM), progress=False)
+                             settings=RunSettings(video=False, detector=DM,
+                                                  detector_params=paper), progress=False)
     late = range(150, 200)  # long after A's blob has faded into the background
     held = _ids_near(with_t.log, a_xy, late)
     assert len(held) == len(late), "A is lost once it stops"
@@ -406,9 +411,22 @@ def test_a_stopped_vehicle_keeps_its_id_by_template_matching(tmp_path) -> None:
     assert not _ids_near(with_t.log, b_xy, late)
     # without template matching A is lost too
     without = track_to_folder(frames, fps=30.0, size=(200, 120), out=tmp_path / "n",
-                              settings=RunSettings(video=False, templates=False, detector=DM),
+                              settings=RunSettings(video=False, templates=False, detector=DM,
+                                                   detector_params=paper),
                               progress=False)
     assert not _ids_near(without.log, a_xy, late)
+    # the pipeline's default holds the tracked pixels out of the background: A stays a blob
+    # and keeps the same ID by detection; B, which appeared and stands, is an object of the
+    # scene too and stays tracked (it would be absorbed after the 60 s slow path)
+    held_run = track_to_folder(frames, fps=30.0, size=(200, 120), out=tmp_path / "h",
+                               settings=RunSettings(video=False, templates=False, detector=DM),
+                               progress=False)
+    kept = _ids_near(held_run.log, a_xy, late)
+    assert len(kept) == len(late)
+    assert all(s == int(TrackState.CONFIRMED) for _, s in kept.values())
+    assert {i for i, _ in kept.values()} == {
+        i for i, _ in _ids_near(held_run.log, (60.0, 44.5), range(25, 27)).values()}
+    assert len(_ids_near(held_run.log, b_xy, late)) == len(late)
 
 
 def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() -> None:

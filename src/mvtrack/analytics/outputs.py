@@ -64,8 +64,14 @@ def write_outputs(result: AnalyticsResult, folder: str | os.PathLike[str]) -> di
     return {name: write_table(folder / f"{name}.csv", getattr(result, name)) for name in FILES}
 
 
+#: a row is ``stopped`` when its track moves less than this share of its box's shorter side
+#: in a second (the ``motion`` column of ``states.csv``)
+STOPPED_SIDES_PER_S = 1.0
+
+
 def states_table(
-    log: Any, flags: Sequence[Any] | None = None, scores: Sequence[Any] | None = None
+    log: Any, flags: Sequence[Any] | None = None, scores: Sequence[Any] | None = None,
+    fps: float = 30.0,
 ) -> Table:
     """One row per public track row of a :class:`~mvtrack.tracking.TrackLog` (``states.csv``).
 
@@ -81,6 +87,12 @@ def states_table(
       ``(track_id, score)`` of its held rows, as :attr:`mvtrack.video.PipelineResult.scores`
       keeps them; empty everywhere without ``scores``);
     - ``speed_px_per_frame``, the filter's speed;
+    - ``motion``: ``stopped`` when the filter's speed is below the box's shorter side
+      per second (``speed · fps < min(w, h)``, :data:`STOPPED_SIDES_PER_S`), else
+      ``moving`` — the moving → stopped → moving of a vehicle in a queue, whichever evidence
+      held the row (a waiting vehicle whose pixels the disturbance map holds stays a blob,
+      ``confirmed`` and ``stopped``; one that faded is held by its template, ``stopped`` in
+      both);
     - ``blob``: for a row updated by a detection, whether its box came from a ``plain`` blob,
       from fragments ``merged`` into one predicted box or from a blob ``split`` among several
       tracks (``flags[k][j]`` of detection ``j`` of frame ``k``, as
@@ -96,6 +108,8 @@ def states_table(
     scores : sequence, optional
         Indexed by frame number: ``(track_id, score)`` arrays of the rows the frame held by
         template matching.
+    fps : float, default 30
+        Frame rate of the video (for ``motion``).
 
     Returns
     -------
@@ -127,13 +141,17 @@ def states_table(
         _fill_scores(score, held, frame0[held], tid[held], scores)
     frame = frame0 + 1
     order = np.lexsort((tid, frame))
+    speed = np.linalg.norm(c["velocity"][keep], axis=1)
+    side = c["wh"][keep].min(axis=1) if len(speed) else np.zeros(0)
+    motion = np.where(speed * fps < STOPPED_SIDES_PER_S * side, "stopped", "moving")
     return {
         "frame": frame[order],
         "id": tid[order],
         "state": names[st][order],
         "evidence": evidence[order],
         "template_score": score[order],
-        "speed_px_per_frame": np.linalg.norm(c["velocity"][keep], axis=1)[order],
+        "speed_px_per_frame": speed[order],
+        "motion": motion[order],
         "blob": blob[order],
     }
 

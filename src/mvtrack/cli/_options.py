@@ -100,8 +100,15 @@ def video_settings(
                 f"--detector {detector!r} is not a detector (choose one of: "
                 f"{', '.join(DETECTORS)})"
             )
-        params = settings.detector_params if detector == settings.detector else {}
-        settings = dataclasses.replace(settings, detector=detector, detector_params=params)
+        if detector != settings.detector and settings.detector_params:
+            keys = ", ".join(sorted(settings.detector_params))
+            raise InputError(
+                f"--detector {detector!r} replaces the config's detector "
+                f"{settings.detector!r}, whose parameters ({keys}) would not apply: set "
+                f"[detector] name = {detector!r} in {config} instead"
+            )
+        settings = dataclasses.replace(settings, detector=detector,
+                                       detector_params=settings.detector_params)
     if no_video:
         settings = dataclasses.replace(settings, video=False)
     if no_templates:

@@ -37,7 +37,7 @@ def run_demo(
         scene = scene.truncate(frames)
     # paper 1's front end, whatever the default of mvtrack track: the demo is paper 1's system
     settings = resolve_settings(RunSettings(video=video, detector="disturbance-map"),
-                                scene.size)
+                                scene.size, scene.fps)
     parts = (build_detector(settings), build_tracker(settings, scene.fps))
     run = track_to_folder(
         render_frames(scene, seed), fps=scene.fps, size=scene.size, settings=settings, out=out,

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from mvtrack.detection.base import FrontEnd, luminance
 from mvtrack.detection.blobs import BlobExtractor
+from mvtrack.types import Detections, TrackFrame
 
 
 def _check_threshold(threshold: float) -> float:
@@ -56,6 +57,14 @@ class DisturbanceMap(FrontEnd):
         and not the frame's, the place a vehicle that stood long enough to be absorbed has
         left) and reset their pixels of :math:`B` to the frame, so the vehicle's track follows
         the vehicle, not the place it stood.
+    hold : int, default 0
+        Not in paper 1. Frames a pixel under a tracked object is kept out of :math:`B` (0: the
+        paper's update everywhere). With ``hold > 0`` the video loop hands the tracker's
+        output to :meth:`observe`, and the pixels inside the boxes the confirmed tracks are
+        predicted at in the next frame are not learnt — a vehicle that stops in a queue stays
+        foreground, and when it drives on the background under it is the road, not a ghost
+        of it — until they have been held ``hold`` frames in a row; then they are learnt at
+        the usual rate, so an object that parks is absorbed on purpose (the slow path).
     **blob
         The blob stage's keywords ``min_area, max_area, open_size, close_size, connectivity,
         center``, see :class:`~mvtrack.detection.blobs.BlobExtractor` (defaults 20, None, 3,
@@ -78,6 +87,7 @@ class DisturbanceMap(FrontEnd):
         *,
         warmup: int = 0,
         ghost_every: int = 0,
+        hold: int = 0,
         **blob: Any,
     ) -> None:
         if not (0.0 < beta_min <= 1.0):
@@ -89,6 +99,9 @@ class DisturbanceMap(FrontEnd):
         self.threshold = _check_threshold(threshold)
         self.beta_min = float(beta_min)
         self.ghost_every = ghost_every
+        if isinstance(hold, bool) or not isinstance(hold, int) or hold < 0:
+            raise ValueError(f"hold must be a whole number of frames >= 0, got {hold!r}")
+        self.hold = hold
         self._reset_model()
 
     def _reset_model(self) -> None:
@@ -98,6 +111,8 @@ class DisturbanceMap(FrontEnd):
         self._grey_f: NDArray[np.float32] | None = None  # I_k, then |D_k|, float32
         self._fg: NDArray[np.uint8] | None = None
         self._thr: NDArray[np.float32] | None = None
+        self._held_boxes = np.zeros((0, 4))  # tlwh of the tracks' boxes predicted for now
+        self._held_for: NDArray[np.uint16] | None = None  # frames each pixel has been held
 
     def beta(self, k: int) -> float:
         """Learning rate :math:`\\beta_k = \\max(1/(k+1), \\beta_{\\min})` (SPEC §1.1 [R])."""
@@ -131,8 +146,36 @@ class DisturbanceMap(FrontEnd):
         if self.ghost_every and k % self.ghost_every == 0:
             self._remove_ghosts(grey)  # not in paper 1: ghosts reset to the frame there
         # B_k = (1 − β_k) B_{k−1} + β_k I_k, β_k = max(1/(k+1), β_min)  (SPEC §1.1 [R])
-        cv2.accumulateWeighted(grey, self.background, self.beta(k))
+        if self.hold and len(self._held_boxes):  # not in paper 1: tracked pixels held
+            cv2.accumulateWeighted(grey, self.background, self.beta(k),
+                                   mask=self._learnt_pixels())
+        else:
+            if self._held_for is not None:
+                self._held_for.fill(0)
+            cv2.accumulateWeighted(grey, self.background, self.beta(k))
         return self._fg
+
+    def observe(self, dets: Detections, tracks: TrackFrame) -> None:
+        """Keep the confirmed tracks' boxes predicted for the next frame (option ``hold``;
+        the video loop calls this after each tracker step)."""
+        if self.hold:
+            from mvtrack.detection.feedback import predicted_boxes
+
+            self._held_boxes = predicted_boxes(tracks)
+
+    def _learnt_pixels(self) -> NDArray[np.uint8]:
+        """The mask of the pixels :math:`B` learns this frame under ``hold``: those outside
+        every held box, and those held ``hold`` frames in a row (the slow path)."""
+        shape = self._fg.shape
+        if self._held_for is None or self._held_for.shape != shape:
+            self._held_for = np.zeros(shape, np.uint16)
+        inside = box_cover(self._held_boxes, shape)
+        held = self._held_for
+        np.add(held, 1, out=held, where=inside)  # consecutive frames held
+        held[~inside] = 0
+        np.minimum(held, self.hold + 1, out=held)
+        learn = (held == 0) | (held > self.hold)
+        return learn.view(np.uint8)
 
 
     def _remove_ghosts(self, grey: NDArray[np.uint8]) -> None:
@@ -145,6 +188,24 @@ class DisturbanceMap(FrontEnd):
             return
         self.background[sel] = grey[sel]
         self._fg[sel] = 0
+
+
+def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.bool_]:
+    """The pixels of an image of ``shape`` (H, W) inside any of the boxes ``tlwh`` (K, 4),
+    without a loop over the boxes: each box adds +1 / −1 at its four corners of a
+    difference image whose 2-D prefix sum counts the boxes over each pixel."""
+    h, w = shape[0], shape[1]
+    b = np.asarray(tlwh, np.float64).reshape(-1, 4)
+    x0 = np.clip(np.floor(b[:, 0]), 0, w).astype(np.intp)
+    y0 = np.clip(np.floor(b[:, 1]), 0, h).astype(np.intp)
+    x1 = np.clip(np.ceil(b[:, 0] + b[:, 2]), 0, w).astype(np.intp)
+    y1 = np.clip(np.ceil(b[:, 1] + b[:, 3]), 0, h).astype(np.intp)
+    diff = np.zeros((h + 1, w + 1), np.int32)
+    np.add.at(diff, (y0, x0), 1)
+    np.add.at(diff, (y0, x1), -1)
+    np.add.at(diff, (y1, x0), -1)
+    np.add.at(diff, (y1, x1), 1)
+    return diff.cumsum(0).cumsum(1)[:h, :w] > 0
 
 
 class FrameDifference(FrontEnd):

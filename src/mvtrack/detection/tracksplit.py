@@ -67,5 +67,9 @@ class TrackSplit:
         return Detections.from_tlwh(dets.frame, boxes)
 
     def observe(self, dets: Detections, tracks: TrackFrame) -> None:
-        """Keep the confirmed tracks' boxes predicted for the next frame."""
+        """Keep the confirmed tracks' boxes predicted for the next frame (and hand the
+        tracks to the front end's own ``observe``, if it has one)."""
         self.predicted = predicted_boxes(tracks)
+        inner = getattr(self.inner, "observe", None)
+        if inner is not None:
+            inner(dets, tracks)

@@ -68,7 +68,7 @@ def track_scene(
 
     if detector_params is None:  # the pipeline's defaults for this image size
         paper = RunSettings(detector=PAPER_DETECTOR)
-        detector_params = resolve_settings(paper, scene.size).detector_params
+        detector_params = resolve_settings(paper, scene.size, scene.fps).detector_params
     det = make_detector(detector, **detector_params)
     if prime > 0:
         empty = render_background(scene, seed)
@@ -274,10 +274,12 @@ def breaks(frames: IntArray, tracks: IntArray) -> list[tuple[int, int, int]]:
     return [(int(f[i]), int(t[i - 1]), int(t[i])) for i in change]
 
 
-def pipeline_blob_params(size: tuple[int, int]) -> dict[str, Any]:
-    """The blob stage ``mvtrack track`` uses for a video of ``size`` (a 7×7 closing and
-    area ≥ 40 px at 320×240), which the specification's experiments run as a variant."""
-    return dict(resolve_settings(RunSettings(detector=PAPER_DETECTOR), size).detector_params)
+def pipeline_blob_params(size: tuple[int, int], fps: float = 30.0) -> dict[str, Any]:
+    """The disturbance map's settings ``mvtrack track`` uses for a video of ``size`` at
+    ``fps`` (a 7×7 closing and area ≥ 40 px at 320×240, the ghost test, tracked pixels held
+    out of the background), which the specification's experiments run as a variant."""
+    paper = RunSettings(detector=PAPER_DETECTOR)
+    return dict(resolve_settings(paper, size, fps).detector_params)
 
 
 def prediction_errors(run: SceneRun, obj_id: int, warmup_hits: int = 6) -> dict[str, Any]:
@@ -330,7 +332,7 @@ def default_config(scene: Scene) -> TrackerConfig:
     from mvtrack.video import build_tracker_config
 
     paper = RunSettings(detector=PAPER_DETECTOR)
-    return build_tracker_config(resolve_settings(paper, scene.size), scene.fps)
+    return build_tracker_config(resolve_settings(paper, scene.size, scene.fps), scene.fps)
 
 
 def summarise(run: SceneRun, min_assoc: int = 5) -> dict[str, Any]:

@@ -71,7 +71,7 @@ DEFAULT_RUNS = 3
 def _settings(scene: Any) -> dict[str, dict[str, Any]]:
     """Name -> tracker config and pipeline options; the two headline settings first."""
     fps = scene.fps
-    pipe = pipeline_blob_params(scene.size)
+    pipe = pipeline_blob_params(scene.size, scene.fps)
     out: dict[str, dict[str, Any]] = {}
     for p in PREDICTORS:
         cfg = paper1(p, fps=fps, gate_px=20.0)
@@ -88,7 +88,8 @@ def _settings(scene: Any) -> dict[str, dict[str, Any]]:
 VARIANTS = {
     "pipeline blobs": "the disturbance map as `mvtrack track` runs it (7×7 closing, area ≥ 40 "
     "px, which merges the two tones of a vehicle into one blob; ghosts tested every 5 "
-    "frames); SPEC §1.1 [R] has neither",
+    "frames; the pixels under the tracks' predicted boxes kept out of the background for up "
+    "to 60 s, so a waiting vehicle stays a blob); SPEC §1.1 [R] has none of them",
     f"NCC ≥ {LOOSE_NCC:g}": "under this scene's noise and sub-pixel jitter a standing vehicle's "
     "NCC against its last detected appearance hovers around 0.75–0.82",
     "no templates": "what template matching does for the waiting vehicles",

@@ -54,7 +54,8 @@ tracks on one detection keep slightly different estimates (median
 {kf['twin_separation_px']:.2g} px apart, the same position in
 {kf['twin_exact_ties_share']:.0%} of the frames), and which one is nearer the vehicle changes
 from frame to frame, so neither holds 80 % of it. The pipeline's
-blob stage (7×7 closing, area ≥ 40 px, with its ghost test; variant) merges the tones: then
+blob stage (7×7 closing, area ≥ 40 px, with its ghost test and the tracked pixels held out of
+the background; variant) merges the tones and keeps the waiting vehicles as blobs: then
 {fmt_rate(pk['followed_moving'])} (KF) and {fmt_rate(pr['followed_moving'])} (RLS) followed,
 {fmt_rate(pk['paired_moving'])} and {fmt_rate(pr['paired_moving'])} one-to-one, with
 {pk['spurious_median']:g} and {pr['spurious_median']:g} spurious tracks per run instead of

@@ -74,7 +74,7 @@ def _configs(scene: Any) -> dict[str, dict[str, Any]]:
     fps = scene.fps
     out = {d: {"config": paper2(d, fps=fps), "detector_params": SPEC_BLOBS} for d in DISTANCES}
     out["default"] = {"config": default_config(scene),
-                      "detector_params": pipeline_blob_params(scene.size)}
+                      "detector_params": pipeline_blob_params(scene.size, scene.fps)}
     return out
 
 

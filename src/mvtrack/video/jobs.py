@@ -237,7 +237,7 @@ def _track_until_stopped(video: str, out: str, settings: RunSettings, fps: float
         raise KeyboardInterrupt
     src = open_source(video, fps=fps)
     with src:
-        resolved = resolve_settings(settings, src.size)
+        resolved = resolve_settings(settings, src.size, src.fps)
         parts = (build_detector(resolved), build_tracker(resolved, src.fps))
         return track_to_folder(
             flag.frames(frame for _, frame in src), fps=src.fps, size=src.size,

@@ -131,7 +131,7 @@ def track_to_folder(
     from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
 
     if parts is None:
-        settings = resolve_settings(settings, size)
+        settings = resolve_settings(settings, size, fps)
         detector, tracker = build_detector(settings), build_tracker(settings, fps)
     else:
         detector, tracker = parts
@@ -147,7 +147,7 @@ def track_to_folder(
     if flush is not None:  # both files exist (empty) before the first frame
         frames_of = getattr(config, "frames", None)
         stream = StreamingOutput(
-            out, flush, gap=frames_of().max_misses if frames_of is not None else None
+            out, flush, gap=frames_of().max_misses if frames_of is not None else None, fps=fps
         )
         log = stream.log
         paths.update(stream.paths)
@@ -307,7 +307,8 @@ def write_tables(
     paths: dict[str, Path] = {}
     if "states" not in run.paths:  # a streaming run wrote it as it went
         paths["states"] = write_table(out / "states.csv",
-                                      states_table(run.log, res.flags, res.scores))
+                                      states_table(run.log, res.flags, res.scores,
+                                                   fps=float(run.summary["video_fps"])))
     if settings.analytics is not None and res.error is None:
         from mvtrack.analytics import analyse_folder, settings_from_dict
 
@@ -368,7 +369,7 @@ def track_video(
 
     src = open_source(video, fps=fps)
     with src:
-        resolved = resolve_settings(settings, src.size)
+        resolved = resolve_settings(settings, src.size, src.fps)
         parts = (build_detector(resolved), build_tracker(resolved, src.fps))
         return track_to_folder(
             (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,

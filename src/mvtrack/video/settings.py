@@ -14,8 +14,15 @@ REFERENCE_SIZE = (320, 240)
 OWN_BLOB_STAGE = frozenset({"scene"})
 
 
-def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSettings:
-    """Fill in the size-dependent defaults the user left open, for a ``size`` (W, H) video.
+#: seconds a tracked pixel is kept out of the disturbance map's background (``hold``)
+HOLD_SECONDS = 60.0
+
+
+def resolve_settings(
+    settings: RunSettings, size: tuple[int, int], fps: float = 30.0
+) -> RunSettings:
+    """Fill in the size-dependent defaults the user left open, for a ``size`` (W, H) video
+    at ``fps`` frames per second.
 
     With ``s² = W·H / (320·240)`` (the papers' 320×240, SPEC §1.4):
 
@@ -40,7 +47,11 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
     - for the disturbance map (not in paper 1): its ghosts tested every 5 frames
       (``ghost_every = 5``), so a vehicle that stood keeps its track when it leaves
       (``docs/video-pipeline.md``, measured on X5, X8, the stop-and-go queue and vtest.avi;
-      ``track_split`` stays off: it splits X8's walking group wrongly).
+      ``track_split`` stays off: it splits X8's walking group wrongly); and the pixels
+      under the confirmed tracks' predicted boxes kept out of its background for up to
+      ``HOLD_SECONDS`` (``hold``, in frames at ``fps``), so a vehicle that waits in a queue
+      stays foreground and leaves no ghost when it drives on; one that stands longer is
+      absorbed (``docs/video-pipeline.md``).
 
     The tracker values are only scaled up: images smaller than 320×240 keep them.
 
@@ -58,6 +69,7 @@ def resolve_settings(settings: RunSettings, size: tuple[int, int]) -> RunSetting
         det.setdefault("close_size", 7)
     if settings.detector == "disturbance-map":
         det.setdefault("ghost_every", 5)
+        det.setdefault("hold", max(1, round(HOLD_SECONDS * fps)))
     tracker = dict(settings.tracker)
     if tracker.get("preset", "default") == "default":
         # blobs merge and split (two vehicles in one blob, a person in two): a blob's box

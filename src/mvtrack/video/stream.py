@@ -214,6 +214,7 @@ class StreamingOutput:
     def __init__(
         self, out: str | Path, interval: float, *, gap: int | None = None,
         history: int = TRAJECTORY_FRAMES, clock: Callable[[], float] = time.monotonic,
+        fps: float = 30.0,
     ) -> None:
         from mvtrack.analytics.outputs import states_table, table_csv
 
@@ -221,6 +222,7 @@ class StreamingOutput:
             raise ValueError(f"--flush must be a number of seconds > 0, got {interval}")
         out = Path(out)
         self.interval = float(interval)
+        self.fps = float(fps)
         self.results = LineAppender(out / "results.txt")
         self.states = LineAppender(out / "states.csv",
                                    header=table_csv(states_table(TrackLog())))
@@ -265,7 +267,7 @@ class StreamingOutput:
             self.recent.add(cols, now)
             results = format_rows(self.log.to_mot(include_coasting=False), "results")
             table = states_table(self.log, _FrameItems(first, self._flags),
-                                 _FrameItems(first, self._scores))
+                                 _FrameItems(first, self._scores), fps=self.fps)
             states = table_csv(table).split("\n", 1)[1] if len(table["frame"]) else ""
             self.results.append(results)
             self.states.append(states)
