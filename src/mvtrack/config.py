@@ -1,6 +1,6 @@
 """Settings of a video tracking run, from a TOML file (``--config FILE.toml``) and the CLI.
 
-The file has five optional tables; every key is optional and the command-line options win
+The file has six optional tables; every key is optional and the command-line options win
 over the file::
 
     [tracker]                 # preset, then any field of mvtrack.tracking.TrackerConfig
@@ -19,6 +19,10 @@ over the file::
     write = true
     trail = 30                # frames of trail behind each track
     gates = true              # draw the gate regions
+
+    [relink]                  # a track ended behind an occluder continued by a new one
+    enabled = true            # then any field of mvtrack.video.relink.RelinkSettings
+    window = 2.0              # seconds
 
     [analytics]               # counts, movements and speeds (mvtrack.analytics.settings)
     interval = "15min"        # with sub-tables [analytics.lines.NAME], [analytics.zones.NAME],
@@ -40,16 +44,26 @@ import os
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mvtrack.errors import InputError
 from mvtrack.registry import DEFAULT_DETECTOR, DETECTORS
+
+if TYPE_CHECKING:
+    from mvtrack.video.relink import RelinkSettings
+
+
+def _default_relink() -> RelinkSettings:
+    from mvtrack.video.relink import RelinkSettings
+
+    return RelinkSettings()
 
 _TABLES: dict[str, tuple[str, ...]] = {
     "tracker": (),  # checked against TrackerConfig fields (plus "preset")
     "detector": (),  # "name" plus the detector's parameters
     "templates": (),  # "enabled" plus TemplateBank parameters
     "video": ("write", "trail", "gates"),
+    "relink": (),  # checked against mvtrack.video.relink.RelinkSettings
     "analytics": (),  # checked by mvtrack.analytics.settings
 }
 
@@ -79,6 +93,9 @@ class RunSettings:
     analytics : dict or None
         The ``[analytics]`` table as read (already checked by
         :func:`mvtrack.analytics.settings.settings_from_dict`); None when the file has none.
+    relink : RelinkSettings
+        Whether and how a new track continues one that ended behind an occluder
+        (:mod:`mvtrack.video.relink`).
     """
 
     tracker: dict[str, Any] = field(default_factory=dict)
@@ -90,6 +107,7 @@ class RunSettings:
     trail: int = 30
     gates: bool = True
     analytics: dict[str, Any] | None = None
+    relink: RelinkSettings = field(default_factory=_default_relink)
 
     def with_overrides(self, **tracker_overrides: Any) -> RunSettings:
         """A copy with the non-None ``tracker_overrides`` (CLI options) applied."""
@@ -194,6 +212,16 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
 
         settings_from_dict(analytics, path)  # every key checked now, before any tracking
 
+    from mvtrack.video.relink import relink_settings
+
+    relink_table = data.get("relink")
+    if relink_table is not None and not isinstance(relink_table, dict):
+        raise InputError(f"{path}: [relink] must be a table")
+    try:
+        relink = relink_settings(relink_table)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{path}: {exc}") from None
+
     return RunSettings(
         tracker=tracker,
         detector=name,
@@ -204,4 +232,5 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
         trail=trail,
         gates=gates,
         analytics=analytics,
+        relink=relink,
     )

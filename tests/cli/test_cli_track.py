@@ -75,6 +75,9 @@ def test_bad_config_key_is_one_line_error_and_writes_nothing(tmp_path, capsys) -
         ("[video]\ntrail = 1\n", "trail"),
         ("[video]\nwrite = 3\n", "video.write"),
         ("[tracker\n", "invalid TOML"),
+        ("[relink]\nwindow = -1.0\n", "relink.window"),
+        ("[relink]\nwidnow = 1.0\n", "widnow"),
+        ('[relink]\nenabled = "yes"\n', "relink.enabled"),
     ],
 )
 def test_config_errors_name_the_key(tmp_path, text: str, needle: str) -> None:

@@ -62,7 +62,8 @@ def test_vtest_whole_video(vtest_path, tmp_path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["frames"] == 795 and summary["ended_early"] is False
     stats = _check_plausible(_rows(out), 795)
-    assert 40 <= stats["tracks"] <= 400, stats
+    # about 20 people walk through; measured 34 tracks (48 without relinking)
+    assert 20 <= stats["tracks"] <= 400, stats
     assert stats["long"] >= 30, stats
     assert stats["median_len"] >= 8, stats
     assert 2 <= stats["per_frame"] <= 20, stats

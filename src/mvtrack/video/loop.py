@@ -171,6 +171,7 @@ def run_frames(
     progress: bool | None = None,
     desc: str = "tracking",
     keep: bool = True,
+    relink: Any = None,
 ) -> PipelineResult:
     """Detect and track every frame of ``frames``.
 
@@ -198,6 +199,11 @@ def run_frames(
         Keep every frame's tracks, flags and scores in the result (``False``: a streaming
         run, whose ``on_frame`` writes them, keeps memory flat; ``tracks``, ``flags`` and
         ``scores`` stay empty).
+    relink : Relinker, optional
+        Gives a new track the ID of one that ended where it reappears
+        (:class:`mvtrack.video.relink.Relinker`); called after the detector and the rescuer
+        have seen the tracker's own IDs, so everything kept, drawn and written carries the
+        shown IDs.
 
     Returns
     -------
@@ -236,9 +242,15 @@ def run_frames(
                 result.flags.append(flags_of(detector, len(dets)))
             if rescuer is not None:
                 rescuer.observe(image, dets, tracks)
+            held = scores_of(rescuer)
+            if relink is not None:
+                live = getattr(getattr(tracker, "tracks", None), "track_id", None)
+                tracks = relink(image, tracks, live)
+                if held.track_id.size:
+                    held = HeldScores(relink.shown(held.track_id), held.score)
             if keep:
                 result.tracks.append(tracks)
-                result.scores.append(scores_of(rescuer))
+                result.scores.append(held)
             result.n_frames = k + 1
             result.n_detections += len(dets)
             if on_frame is not None:

@@ -125,7 +125,8 @@ def track_to_folder(
 
     from mvtrack.io.atomic import atomic_path, write_json
     from mvtrack.tracking import TrackLog
-    from mvtrack.video.loop import flags_of, scores_of
+    from mvtrack.video.loop import HeldScores, flags_of, scores_of
+    from mvtrack.video.relink import Relinker
     from mvtrack.video.stream import StreamingOutput
     from mvtrack.viz.annotate import TrailBuffer, annotate_frame
     from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
@@ -136,6 +137,7 @@ def track_to_folder(
     else:
         detector, tracker = parts
     rescuer = build_rescuer(settings, tracker, detector) if settings.templates else None
+    relinker = Relinker(fps, settings.relink) if settings.relink.enabled else None
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths: dict[str, Path] = {}
@@ -146,9 +148,10 @@ def track_to_folder(
     stream = None
     if flush is not None:  # both files exist (empty) before the first frame
         frames_of = getattr(config, "frames", None)
-        stream = StreamingOutput(
-            out, flush, gap=frames_of().max_misses if frames_of is not None else None, fps=fps
-        )
+        gap = frames_of().max_misses if frames_of is not None else None
+        if gap is not None and relinker is not None:  # a relinked ID pauses up to the window
+            gap += relinker.window
+        stream = StreamingOutput(out, flush, gap=gap, fps=fps)
         log = stream.log
         paths.update(stream.paths)
 
@@ -177,7 +180,10 @@ def track_to_folder(
             if stream is None:
                 log.append(tracks)
             else:
-                stream.add(tracks, flags_of(detector, len(dets)), scores_of(rescuer))
+                held = scores_of(rescuer)
+                if relinker is not None and held.track_id.size:
+                    held = HeldScores(relinker.shown(held.track_id), held.score)
+                stream.add(tracks, flags_of(detector, len(dets)), held)
             if k == 0:
                 background.append(image.copy())
             shot = snapshot is not None and k == snapshot
@@ -210,6 +216,7 @@ def track_to_folder(
         result = run_frames(
             frames, detector, tracker, rescuer=rescuer, max_frames=max_frames,
             on_frame=on_frame, total=total, progress=progress, keep=stream is None,
+            relink=relinker,
         )
         if stream is not None:
             stream.close()

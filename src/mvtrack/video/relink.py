@@ -1,0 +1,268 @@
+r"""A track that ends behind an occluder and a new one that starts where it should reappear,
+looking the same, are one object: the new one takes the old ID (online, in the video loop).
+
+The tracker ends a track after ``max_coast`` without a detection; a person hidden by a lamp
+post for longer comes back as a new track. :class:`Relinker` keeps the confirmed tracks that
+ended in the last ``window`` seconds (their last position ``x``, velocity ``v`` and box, and
+an appearance: the colour histogram ``a`` of their measured boxes, an exponential average).
+When a new public ID appears in frame ``k``, it is compared with every track that ended at
+frame ``k_e`` within the window:
+
+- **motion**: the new centre ``z`` lies within ``reach`` times the taller of the two boxes of
+  the ended track's extrapolation, :math:`\|z - (x + v (k - k_e))\| \le \rho \max(h, h')`,
+  with ``v`` the track's mean velocity over its last one to two seconds of output rows (the
+  filter's last velocity is distorted as the object disappears behind the occluder: its box
+  shrinks from one side);
+- **size**: the heights differ by at most the factor ``size_ratio``;
+- **appearance**: the Bhattacharyya coefficient of the histograms,
+  :math:`\sum_b \sqrt{a_b a'_b} \ge` ``min_similarity``.
+
+Among the pairs that pass, one assignment minimising
+:math:`\|z - \hat x\| / (\rho \max(h, h')) + (1 - \mathrm{BC})` links each new track to at
+most one ended track, which then leaves the gallery; the new track's rows carry the old ID
+from its first one on (it had none before: tentative rows are not output). Nothing is
+rewritten afterwards, so the annotated video, ``results.txt`` and ``states.csv`` agree.
+
+The histogram: pixels of the box's central part (x from 20 % to 80 % of the width, y from
+10 % to 90 % of the height, every second row and column) in HSV; a pixel with saturation
+≥ 60 falls into one of 8 hues × 3 saturations, a grey one into one of 4 brightnesses
+(:func:`box_histograms`, one ``bincount`` for all boxes of a frame).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linear_sum_assignment
+
+from mvtrack.types import TrackFrame
+
+Image = NDArray[np.uint8]
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+HUES, SATS, GREYS = 8, 3, 4
+#: bins of the appearance histogram
+BINS = HUES * SATS + GREYS
+#: saturation (0–255) from which a pixel counts by its hue
+MIN_SATURATION = 60
+
+
+def box_histograms(image: Image, tlwh: FloatArray, step: int = 2) -> FloatArray:
+    """Normalised colour histograms (K, :data:`BINS`) of the central part of the boxes
+    ``tlwh`` (K, 4) of a BGR ``image``, every ``step``-th row and column; all boxes at once.
+    A box with no pixel in the image gets a row of zeros."""
+    h_img, w_img = image.shape[:2]
+    b = np.asarray(tlwh, np.float64).reshape(-1, 4)
+    k = b.shape[0]
+    if k == 0:
+        return np.zeros((0, BINS))
+    x0 = np.clip(b[:, 0] + 0.2 * b[:, 2], 0, w_img).astype(np.int64)
+    x1 = np.clip(b[:, 0] + 0.8 * b[:, 2], 0, w_img).astype(np.int64)
+    y0 = np.clip(b[:, 1] + 0.1 * b[:, 3], 0, h_img).astype(np.int64)
+    y1 = np.clip(b[:, 1] + 0.9 * b[:, 3], 0, h_img).astype(np.int64)
+    nx = np.maximum((x1 - x0 + step - 1) // step, 0)
+    ny = np.maximum((y1 - y0 + step - 1) // step, 0)
+    n = nx * ny  # sampled pixels per box
+    total = int(n.sum())
+    if total == 0:
+        return np.zeros((k, BINS))
+    box = np.repeat(np.arange(k), n)
+    off = np.arange(total) - np.repeat(np.cumsum(n) - n, n)  # index within its box
+    nxr = np.maximum(np.repeat(nx, n), 1)
+    ys = np.repeat(y0, n) + step * (off // nxr)
+    xs = np.repeat(x0, n) + step * (off % nxr)
+    hsv = cv2.cvtColor(image[ys, xs].reshape(1, -1, 3), cv2.COLOR_BGR2HSV)[0].astype(np.int64)
+    chroma = hsv[:, 1] >= MIN_SATURATION
+    hue_bin = (hsv[:, 0] * HUES // 180) * SATS + hsv[:, 1] * SATS // 256
+    grey_bin = HUES * SATS + hsv[:, 2] * GREYS // 256
+    bins = np.where(chroma, hue_bin, grey_bin)
+    hist = np.bincount(box * BINS + bins, minlength=k * BINS).reshape(k, BINS).astype(float)
+    return hist / np.maximum(hist.sum(axis=1, keepdims=True), 1.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class RelinkSettings:
+    """The ``[relink]`` table of the settings (module docstring).
+
+    Attributes
+    ----------
+    enabled : bool
+        Relink at all.
+    window : float
+        Seconds after its end during which a track can be continued.
+    reach : float
+        Radius of the motion test as a share of the taller box.
+    min_similarity : float
+        Least Bhattacharyya coefficient of the appearances, in [0, 1].
+    size_ratio : float
+        Largest ratio of the two box heights (> 1).
+    smoothing : float
+        Weight in (0, 1] of a new measured box in the appearance's exponential average.
+    """
+
+    enabled: bool = True
+    window: float = 2.0
+    reach: float = 0.5
+    min_similarity: float = 0.8
+    size_ratio: float = 1.6
+    smoothing: float = 0.1
+
+    def __post_init__(self) -> None:
+        checks = {
+            "window": self.window > 0, "reach": self.reach > 0,
+            "min_similarity": 0.0 <= self.min_similarity <= 1.0,
+            "size_ratio": self.size_ratio > 1.0, "smoothing": 0.0 < self.smoothing <= 1.0,
+        }
+        for name, ok in checks.items():
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not ok:
+                raise ValueError(f"relink.{name} is out of range (got {value!r})")
+        if not isinstance(self.enabled, bool):
+            raise ValueError(f"relink.enabled must be true or false (got {self.enabled!r})")
+
+
+class Relinker:
+    """Gives a new track the ID of a track that ended where and as it appears (module
+    docstring); one call per frame, after the tracker's step.
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate of the video (the window is in seconds).
+    settings : RelinkSettings, optional
+        The tests' thresholds.
+    """
+
+    def __init__(self, fps: float, settings: RelinkSettings | None = None) -> None:
+        self.settings = RelinkSettings() if settings is None else settings
+        self.window = max(1, round(self.settings.window * float(fps)))
+        self._ids = np.zeros(1, np.int64)  # tracker ID -> shown ID (0: not seen yet)
+        self._app = np.zeros((1, BINS))  # tracker ID -> appearance
+        self._has_app = np.zeros(1, bool)
+        self._last = np.zeros((1, 7))  # tracker ID -> frame, x, y, vx, vy, w, h of last row
+        # tracker ID -> frame, x, y of a row one to two seconds back, and of one up to a
+        # second back (the mean velocity's start, and the next start)
+        self._anchor = np.zeros((1, 3))
+        self._mid = np.zeros((1, 3))
+        self.span = max(1, round(float(fps)))  # frames: one second
+        self._live = np.zeros(0, np.int64)  # tracker IDs shown in the previous frame
+        # the gallery: tracker IDs of ended tracks, newest last
+        self._ended = np.zeros(0, np.int64)
+        #: (old shown ID, new tracker ID, frame) of every link made
+        self.links: list[tuple[int, int, int]] = []
+
+    def shown(self, ids: IntArray) -> IntArray:
+        """The shown IDs of tracker IDs ``ids`` (IDs never seen map to themselves)."""
+        ids = np.asarray(ids, np.int64)
+        out = ids.copy()
+        inside = (ids > 0) & (ids < self._ids.shape[0])
+        mapped = self._ids[ids[inside]]
+        out[inside] = np.where(mapped > 0, mapped, ids[inside])
+        return out
+
+    def __call__(self, image: Image, tracks: TrackFrame, live: IntArray | None = None
+                 ) -> TrackFrame:
+        """``tracks`` with their shown IDs; learns their appearance and ends.
+
+        ``live`` are the tracker IDs still alive (coasting ones not output included), so
+        that a track is ended only when the tracker deleted it; without it, a track is ended
+        when it is no longer output.
+        """
+        pub = tracks.track_id > 0
+        ids = tracks.track_id[pub]
+        self._grow(int(ids.max()) + 1 if ids.size else 0)
+        k = tracks.frame
+        alive = ids if live is None else np.asarray(live, np.int64)
+        gone = np.setdiff1d(self._live, alive)
+        if gone.size:
+            self._ended = np.concatenate([self._ended, gone])
+        if self._ended.size:  # forget what ended too long ago
+            self._ended = self._ended[k - self._last[self._ended, 0] <= self.window]
+        self._live = alive[alive > 0]
+        new = ids[self._ids[ids] == 0]
+        self._ids[new] = new
+        rows = pub.nonzero()[0]
+        measured = rows[tracks.det_index[rows] >= 0]
+        if measured.size:
+            self._learn(image, tracks, measured)
+        now = np.column_stack([np.full(ids.size, float(k)), tracks.filtered_xy[pub]])
+        born = np.isin(ids, new)
+        self._anchor[ids[born]] = now[born]
+        self._mid[ids[born]] = now[born]
+        due = k - self._mid[ids, 0] >= self.span  # the mid row is a second old: shift
+        if due.any():
+            self._anchor[ids[due]] = self._mid[ids[due]]
+            self._mid[ids[due]] = now[due]
+        a = self._anchor[ids]
+        dt = np.maximum(k - a[:, 0], 1.0)[:, None]
+        v = np.where(k > a[:, [0]], (now[:, 1:] - a[:, 1:]) / dt, tracks.velocity[pub])
+        self._last[ids] = np.column_stack([now, v, tracks.wh[pub]])
+        if new.size and self._ended.size:
+            self._link(new)
+        return dataclasses.replace(tracks, track_id=self.shown(tracks.track_id))
+
+    def _grow(self, n: int) -> None:
+        if n <= self._ids.shape[0]:
+            return
+        m = max(n, 2 * self._ids.shape[0])
+        self._ids = np.concatenate([self._ids, np.zeros(m - self._ids.shape[0], np.int64)])
+        self._app = np.concatenate([self._app, np.zeros((m - self._app.shape[0], BINS))])
+        self._has_app = np.concatenate([self._has_app, np.zeros(m - self._has_app.size, bool)])
+        self._last = np.concatenate([self._last, np.zeros((m - self._last.shape[0], 7))])
+        self._anchor = np.concatenate([self._anchor, np.zeros((m - self._anchor.shape[0], 3))])
+        self._mid = np.concatenate([self._mid, np.zeros((m - self._mid.shape[0], 3))])
+
+    def _learn(self, image: Image, tracks: TrackFrame, rows: NDArray[np.intp]) -> None:
+        """The appearance of the measured rows, averaged into their tracks'."""
+        xy, wh = tracks.filtered_xy[rows], tracks.wh[rows]
+        hist = box_histograms(image, np.column_stack([xy - wh / 2, wh]))
+        ids = tracks.track_id[rows]
+        a = self.settings.smoothing
+        old = self._app[ids]
+        first = ~self._has_app[ids]
+        self._app[ids] = np.where(first[:, None], hist, (1 - a) * old + a * hist)
+        self._has_app[ids] = True
+
+    def _link(self, new: IntArray) -> None:
+        """Pair the new tracks with the ended ones (module docstring)."""
+        s = self.settings
+        g = self._ended
+        gl, nl = self._last[g], self._last[new]
+        gap = nl[:, 0][:, None] - gl[:, 0][None, :]  # (new, ended) frames
+        pred = gl[None, :, 1:3] + gl[None, :, 3:5] * gap[..., None]
+        dist = np.linalg.norm(nl[:, None, 1:3] - pred, axis=2)
+        tall = np.maximum(nl[:, 6][:, None], gl[:, 6][None, :])
+        radius = s.reach * tall
+        ratio = np.maximum(nl[:, 6][:, None], gl[:, 6][None, :]) / np.maximum(
+            np.minimum(nl[:, 6][:, None], gl[:, 6][None, :]), 1e-9)
+        sim = np.sqrt(self._app[new][:, None, :] * self._app[g][None, :, :]).sum(axis=2)
+        both = self._has_app[new][:, None] & self._has_app[g][None, :]
+        ok = (gap > 0) & (dist <= radius) & (ratio <= s.size_ratio) & both & (
+            sim >= s.min_similarity)
+        if not ok.any():
+            return
+        cost = np.where(ok, dist / radius + (1.0 - sim), 1e6)
+        r, c = linear_sum_assignment(cost)
+        keep = ok[r, c]
+        r, c = r[keep], c[keep]
+        self._ids[new[r]] = self._ids[g[c]]
+        self.links += [(int(self._ids[g[j]]), int(new[i]), int(nl[i, 0]))
+                       for i, j in zip(r, c, strict=True)]
+        self._ended = np.delete(g, c)
+
+
+def relink_settings(table: dict[str, Any] | None) -> RelinkSettings:
+    """:class:`RelinkSettings` from a ``[relink]`` table (``None``: the defaults)."""
+    if not table:
+        return RelinkSettings()
+    known = {f.name for f in dataclasses.fields(RelinkSettings)}
+    unknown = sorted(set(table) - known)
+    if unknown:
+        raise ValueError(f"relink: unknown key {', '.join(map(repr, unknown))} (known: "
+                         f"{', '.join(sorted(known))})")
+    return RelinkSettings(**table)
