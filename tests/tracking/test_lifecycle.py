@@ -156,3 +156,34 @@ def test_paper_presets_count_their_coasting_in_frames_at_any_frame_rate() -> Non
     assert TrackerConfig(fps=10, max_coast=Frames(5)).frames().max_misses == 5
     assert TrackerConfig(fps=10, max_coast=0.5).frames().max_misses == 5
     assert str(Frames(3)) == "3 frames" and repr(Frames(3)) == "Frames(3)"
+
+
+def _edge_run(frame_size) -> list[list[int]]:
+    """Vehicle A drives right out of a 100 px wide image (last seen at x = 98, frame 19);
+    from frame 21 vehicle B enters at the same edge, 6 px lower, driving left."""
+    from mvtrack.tracking import Tracker
+    from mvtrack.types import Detections
+
+    tracker = Tracker(TrackerConfig(fps=30.0, frame_size=frame_size))
+    ids = []
+    for k in range(30):
+        xy = ([[3.0 + 5 * k, 50.0]] if k < 20 else []) + (
+            [[97.0 - 5 * (k - 21), 56.0]] if k >= 21 else [])
+        d = Detections(k, np.array(xy).reshape(-1, 2), np.tile([10.0, 6.0], (len(xy), 1)))
+        ids.append(tracker.step(d).track_id.tolist())
+    return ids
+
+
+def test_a_track_whose_prediction_leaves_the_image_ends_there() -> None:
+    ids = _edge_run((100.0, 100.0))
+    assert ids[19] == [1] and ids[20] == [] and ids[21] == []  # predicted at 103: gone
+    assert all(i == [2] for i in ids[22:])  # B is a new object
+    # without the image's size A coasts on past the edge and its recovery takes B
+    assert all(i == [1] for i in _edge_run(None)[20:])
+
+
+@pytest.mark.parametrize("bad", [(0, 10), (10,), "640x480", (10, float("inf"))])
+def test_frame_size_must_be_two_positive_numbers(bad) -> None:
+    with pytest.raises(ValueError, match="frame_size"):
+        TrackerConfig(frame_size=bad)
+    assert TrackerConfig(frame_size=[640, 480]).frame_size == (640.0, 480.0)

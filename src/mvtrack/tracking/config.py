@@ -202,6 +202,14 @@ class TrackerConfig:
     nms_iou : float or None
         Within a frame, a detection that overlaps a higher-scored one by at least this IoU is
         dropped before association (duplicate suppression); ``None`` disables it.
+    frame_size : (float, float) or None
+        Width and height of the image, pixels. A track that got no detection and whose
+        prediction has left the image (``x ∉ [0, W)`` or ``y ∉ [0, H)``) ends at once: the
+        object has left the view, and a track that coasts on past the edge would take the next
+        object that enters there (X5: a vehicle leaving eastward and one entering westward at
+        the same edge). ``None`` (the default, a tracker that does not know the image) keeps the
+        coasting rule alone; the video pipeline sets it for the ``default`` preset
+        (:func:`mvtrack.video.resolve_settings`).
     backfill : bool
         Offline runs only (:func:`~mvtrack.tracking.track_detections`): once a track is
         confirmed, the rows of its tentative frames — from its first detection on — are
@@ -245,6 +253,7 @@ class TrackerConfig:
     score_high: float | None = 0.5
     min_score: float = 0.2
     nms_iou: float | None = None
+    frame_size: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -326,6 +335,12 @@ class TrackerConfig:
                 raise bad(name, f"must be a number in [0, 1]{tail}")
         if self.nms_iou is not None and self.nms_iou <= 0:
             raise bad("nms_iou", "must be > 0 or None")
+        fs = self.frame_size
+        if fs is not None:
+            if not (isinstance(fs, (tuple, list)) and len(fs) == 2
+                    and all(_finite_positive(v) for v in fs)):
+                raise bad("frame_size", "must be (width, height) in pixels, both > 0, or None")
+            object.__setattr__(self, "frame_size", (float(fs[0]), float(fs[1])))
         for name in ("predictor_params", "distance_params", "assign_params"):
             if not isinstance(getattr(self, name), Mapping):
                 raise bad(name, "must be a mapping of keyword arguments")

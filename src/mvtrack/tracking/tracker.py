@@ -264,6 +264,11 @@ class Tracker:
         the tracks shown."""
         fp, pred, ints, flo = self._fp, self.predictor, tab.ints, tab.floats
         state, delete, confirmed_now = next_state(ints, matched, rescued, fp)
+        size = self.config.frame_size
+        if size is not None:  # a track whose prediction left the image without a detection
+            held = matched if rescued is None else matched | rescued
+            out_x = (gxy[:, 0] < 0) | (gxy[:, 0] >= size[0])
+            delete |= ~held & (out_x | (gxy[:, 1] < 0) | (gxy[:, 1] >= size[1]))
         ints[:, STATE] = state
         if np.count_nonzero(confirmed_now):
             self._next_id = hand_out_ids(ints, confirmed_now, self._next_id)

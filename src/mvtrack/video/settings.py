@@ -42,7 +42,9 @@ def resolve_settings(
       ``size_ref`` is scaled by ``s`` too (boxes larger than that stretch the gates).
 
     - no size gate (``size_gate = None``): blobs merge and split, so the size of a blob's box
-      says little about which object it is.
+      says little about which object it is;
+
+    - the image's size (``frame_size``): a track that coasts out of the image ends there.
 
     - for the disturbance map (not in paper 1): its ghosts tested every 5 frames
       (``ghost_every = 5``), so a vehicle that stood keeps its track when it leaves
@@ -75,6 +77,8 @@ def resolve_settings(
         # blobs merge and split (two vehicles in one blob, a person in two): a blob's box
         # size is no evidence of identity, unlike a detector's box
         tracker.setdefault("size_gate", None)
+        # a track that coasts out of the image ends there (TrackerConfig.frame_size)
+        tracker.setdefault("frame_size", [float(w), float(h)])
         up = max(s2, 1.0)  # smaller images keep the 320×240 values
         if not {"predictor_params", "measurement_std"} & set(tracker):
             tracker["measurement_std"] = round(2.0 * up**0.5, 3)  # r = 4 s² px²
