@@ -9,8 +9,10 @@ and the crossings of the stop line (truth: 10 eastbound).
 
     python benchmarks/bench_queue.py [--seeds 0,1,2] [--trackers default,kalman-ca,rls]
 
-A tracker name may carry front-end options: ``default+split`` (``track_split``),
-``default+ghosts`` (the disturbance map's ``ghost_every = 5``), ``default+split+ghosts``.
+A tracker name may carry front-end options: ``+split`` (``track_split`` with fragments merged,
+``track_merge``), ``+nosplit`` (no ``track_split``), ``+ghosts`` (``ghost_every = 5``),
+``+hold`` (``hold`` = 60 s), e.g. ``kalman-ca+hold`` or ``default+nosplit``; the default
+already has the pipeline's ghost test, hold and split-only ``track_split``.
 """
 
 from __future__ import annotations
@@ -50,8 +52,10 @@ def main() -> None:
                 cfg, blobs = default_config(sc), pipeline_blob_params(sc.size, sc.fps)
             else:
                 cfg, blobs = paper1(base, fps=sc.fps, gate_px=20.0), dict(spec_blobs)
-            if "split" in extras:  # blobs split by the tracks' predicted boxes
-                blobs = {**blobs, "track_split": True}
+            if "split" in extras:  # blobs split and fragments merged by the predicted boxes
+                blobs = {**blobs, "track_split": True, "track_merge": True}
+            if "nosplit" in extras:  # the disturbance map's blobs as they are
+                blobs = {**blobs, "track_split": False}
             if "ghosts" in extras:  # the disturbance map's ghosts reset to the frame
                 blobs = {**blobs, "ghost_every": 5}
             if "hold" in extras:  # tracked pixels kept out of the background for 60 s

@@ -68,8 +68,42 @@ def test_one_predicted_car_in_the_blob_leaves_it_whole() -> None:
     assert box[2] == pytest.approx(32, abs=1) and (d.flags == PLAIN).all()
 
 
+def _fragments() -> list[np.ndarray]:
+    """Grey road; from frame 1 one 16×10 car in two tones 3 px apart (two blobs)."""
+    empty = np.full((80, 120, 3), 60, np.uint8)
+    car = empty.copy()
+    car[35:45, 30:37] = 220
+    car[35:45, 40:46] = 200
+    return [empty, car]
+
+
+@pytest.mark.parametrize("merge", [True, False])
+def test_track_merge_joins_the_fragments_in_one_predicted_box_or_leaves_them(merge) -> None:
+    empty, car = _fragments()
+    d = make_detector("frame-diff", close_size=0, min_area=10.0, track_split=True,
+                      track_merge=merge)
+    d(empty)
+    d.observe(None, _tracks(np.array([[37.5, 39.5]])))
+    dets = d(car)
+    if merge:  # one box, the union of the fragments
+        assert len(dets) == 1 and dets.tlwh[0][2] == pytest.approx(16, abs=1)
+    else:  # the two fragments as they were
+        assert len(dets) == 2 and (d.flags == PLAIN).all()
+
+
+def test_without_merging_a_blob_of_two_cars_is_still_divided() -> None:
+    empty, cars = _frames()
+    d = make_detector("frame-diff", close_size=0, min_area=10.0, track_split=True,
+                      track_merge=False)
+    d(empty)
+    d.observe(None, _tracks(np.array([[37.5, 39.5], [53.5, 39.5]])))
+    dets = d(cars)
+    assert len(dets) == 2 and (d.flags == SPLIT).all()
+
+
 @pytest.mark.parametrize("params, words", [
     ({"track_split": "yes"}, "track_split must be true or false"),
+    ({"track_split": True, "track_merge": 1}, "track_merge must be true or false"),
 ])
 def test_bad_track_split_values_are_refused(params, words) -> None:
     with pytest.raises(ValueError, match=words):

@@ -318,7 +318,11 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
     base = TrackerConfig()
     small = resolve_settings(RunSettings(detector=DM), (320, 240))
     assert small.detector_params == {"min_area": 40.0, "close_size": 7, "ghost_every": 5,
-                                     "hold": 1800}  # 60 s at the default 30 fps
+                                     "hold": 1800,  # 60 s at the default 30 fps
+                                     "track_split": True, "track_merge": False}
+    mine_split = resolve_settings(
+        RunSettings(detector=DM, detector_params={"track_split": True}), (320, 240))
+    assert "track_merge" not in mine_split.detector_params  # the user's split merges too
     slow = resolve_settings(RunSettings(detector=DM), (320, 240), fps=10.0)
     assert slow.detector_params["hold"] == 600
     other = resolve_settings(RunSettings(detector="mog2"), (320, 240))

@@ -28,7 +28,8 @@ def make_detector(name: str, **params: Any) -> Any:
         whole frame; no background model).
     **params
         ``track_split=True`` (background-model front ends): blobs split and merged by the
-        tracker's predicted boxes (:class:`~mvtrack.detection.tracksplit.TrackSplit`). The
+        tracker's predicted boxes (:class:`~mvtrack.detection.tracksplit.TrackSplit`;
+        ``track_merge=False``: only split). The
         others are constructor parameters of the class (see :class:`DisturbanceMap`,
         :class:`FrameDifference`, :class:`MOG2`, :class:`KNN`,
         :class:`~mvtrack.detection.hog.HOGDetector`);
@@ -44,8 +45,11 @@ def make_detector(name: str, **params: Any) -> Any:
     registry.check("detector", name, DETECTORS)
     cls = DETECTORS[name]
     split = params.pop("track_split", False)
+    merge = params.pop("track_merge", True)
     if not isinstance(split, bool):
         raise ValueError(f"detector {name!r}: track_split must be true or false, got {split!r}")
+    if not isinstance(merge, bool):
+        raise ValueError(f"detector {name!r}: track_merge must be true or false, got {merge!r}")
     if split and not issubclass(cls, FrontEnd):
         raise ValueError(f"detector {name!r}: track_split needs a background-model front end")
     known = {
@@ -66,5 +70,5 @@ def make_detector(name: str, **params: Any) -> Any:
     if split:
         from mvtrack.detection.tracksplit import TrackSplit
 
-        return TrackSplit(det)
+        return TrackSplit(det, merge=merge)
     return det

@@ -283,6 +283,7 @@ def split_merge(
     max_parts: int = 6,
     valley: float = 0.85,
     tall: float = 0.7,
+    merge: bool = True,
 ) -> tuple[FloatArray, NDArray[np.int8]]:
     """Object boxes from the blobs of one frame (module docstring, steps 1–3).
 
@@ -308,6 +309,8 @@ def split_merge(
     tall : float
         Step 3 cuts only blobs at least this share of the expected height (a low, wide blob
         is clutter, not people side by side).
+    merge : bool
+        Run step 1 (``False``: the blobs are only divided, never joined).
     max_parts : int
         Most parts step 3 cuts a blob into.
 
@@ -329,7 +332,10 @@ def split_merge(
         # a track that follows a blob of two people predicts a box of two: not one object
         pred = pred[size_prior.ratio(pred)[:, 0] < max(wide, 1.8)]
     pred = _distinct(pred)
-    boxes, flags = merge_fragments(boxes, pred, inside)
+    if merge:
+        boxes, flags = merge_fragments(boxes, pred, inside)
+    else:
+        flags = np.zeros(len(boxes), np.int8)
     if size_prior is not None:
         boxes, flags = merge_stacked(boxes, flags, size_prior)
     if len(boxes) == 0:

@@ -39,13 +39,19 @@ class TrackSplit:
     inside, cover : float
         :func:`~mvtrack.detection.splitmerge.split_merge`'s share of a fragment inside its
         predicted box (merge) and of a predicted box inside a blob (claim).
+    merge : bool
+        Also merge the fragments inside one predicted box (``False``: blobs are only
+        divided). Merging holds a walking group's blobs together in its predicted box as the
+        group splits up (X8), so the pipeline's disturbance map only divides.
     """
 
-    def __init__(self, inner: Any, *, inside: float = 0.6, cover: float = 0.5) -> None:
+    def __init__(self, inner: Any, *, inside: float = 0.6, cover: float = 0.5,
+                 merge: bool = True) -> None:
         self.inner = inner
         self.name = getattr(inner, "name", "")
         self.inside = float(inside)
         self.cover = float(cover)
+        self.merge = bool(merge)
         self.predicted = np.zeros((0, 4))
         self.flags = np.zeros(0, np.int8)
 
@@ -60,7 +66,7 @@ class TrackSplit:
             self.flags = np.full(len(dets), PLAIN, np.int8)
             return dets
         boxes, flags = split_merge(dets.tlwh, mask, self.predicted, None, inside=self.inside,
-                                   cover=self.cover)
+                                   cover=self.cover, merge=self.merge)
         self.flags = flags
         if len(boxes) == len(dets) and not flags.any():
             return dets  # nothing split or merged: the blobs as they were (their areas kept)

@@ -89,7 +89,8 @@ VARIANTS = {
     "pipeline blobs": "the disturbance map as `mvtrack track` runs it (7×7 closing, area ≥ 40 "
     "px, which merges the two tones of a vehicle into one blob; ghosts tested every 5 "
     "frames; the pixels under the tracks' predicted boxes kept out of the background for up "
-    "to 60 s, so a waiting vehicle stays a blob); SPEC §1.1 [R] has none of them",
+    "to 60 s, so a waiting vehicle stays a blob; a blob that several tracks predict into "
+    "divided among them); SPEC §1.1 [R] has none of them",
     f"NCC ≥ {LOOSE_NCC:g}": "under this scene's noise and sub-pixel jitter a standing vehicle's "
     "NCC against its last detected appearance hovers around 0.75–0.82",
     "no templates": "what template matching does for the waiting vehicles",

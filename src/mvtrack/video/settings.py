@@ -48,8 +48,10 @@ def resolve_settings(
 
     - for the disturbance map (not in paper 1): its ghosts tested every 5 frames
       (``ghost_every = 5``), so a vehicle that stood keeps its track when it leaves
-      (``docs/video-pipeline.md``, measured on X5, X8, the stop-and-go queue and vtest.avi;
-      ``track_split`` stays off: it splits X8's walking group wrongly); and the pixels
+      (``docs/video-pipeline.md``, measured on X5, X8, the stop-and-go queue and vtest.avi);
+      its blobs divided among the confirmed tracks predicted into them (``track_split``,
+      without merging fragments, ``track_merge = False``: merging held X8's walking group
+      together as it split up); and the pixels
       under the confirmed tracks' predicted boxes kept out of its background for up to
       ``HOLD_SECONDS`` (``hold``, in frames at ``fps``), so a vehicle that waits in a queue
       stays foreground and leaves no ghost when it drives on; one that stands longer is
@@ -72,6 +74,9 @@ def resolve_settings(
     if settings.detector == "disturbance-map":
         det.setdefault("ghost_every", 5)
         det.setdefault("hold", max(1, round(HOLD_SECONDS * fps)))
+        if "track_split" not in det:  # a blob that several tracks predict into is divided
+            det["track_split"] = True
+            det.setdefault("track_merge", False)
     tracker = dict(settings.tracker)
     if tracker.get("preset", "default") == "default":
         # blobs merge and split (two vehicles in one blob, a person in two): a blob's box
