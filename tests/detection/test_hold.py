@@ -85,11 +85,12 @@ def test_box_cover_matches_filling_the_boxes_one_by_one(seed) -> None:
         x0, y0 = max(int(np.floor(x)), 0), max(int(np.floor(y)), 0)
         x1, y1 = max(int(np.ceil(x + w)), 0), max(int(np.ceil(y + h)), 0)
         ref[y0:y1, x0:x1] = True
-    np.testing.assert_array_equal(box_cover(boxes, shape), ref)
+    np.testing.assert_array_equal(box_cover(boxes, shape), 255 * ref.astype(np.uint8))
     assert not box_cover(np.zeros((0, 4)), shape).any()
+    assert not box_cover(np.array([[5.0, 5.0, 0.0, 3.0]]), shape).any()  # empty box
 
 
-@pytest.mark.parametrize("bad", [-1, 2.5, True, "60"])
+@pytest.mark.parametrize("bad", [-1, 2.5, True, "60", 65535])
 def test_hold_must_be_a_whole_number_of_frames(bad) -> None:
     with pytest.raises(ValueError, match="hold"):
         make_detector("disturbance-map", hold=bad)

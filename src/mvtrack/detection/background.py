@@ -99,8 +99,9 @@ class DisturbanceMap(FrontEnd):
         self.threshold = _check_threshold(threshold)
         self.beta_min = float(beta_min)
         self.ghost_every = ghost_every
-        if isinstance(hold, bool) or not isinstance(hold, int) or hold < 0:
-            raise ValueError(f"hold must be a whole number of frames >= 0, got {hold!r}")
+        if isinstance(hold, bool) or not isinstance(hold, int) or not 0 <= hold < 65535:
+            raise ValueError(f"hold must be a whole number of frames in [0, 65534], got "
+                             f"{hold!r}")
         self.hold = hold
         self._reset_model()
 
@@ -165,18 +166,19 @@ class DisturbanceMap(FrontEnd):
 
     def _learnt_pixels(self) -> NDArray[np.uint8]:
         """The mask of the pixels :math:`B` learns this frame under ``hold``: those outside
-        every held box, and those held ``hold`` frames in a row (the slow path)."""
+        every held box, and those held ``hold`` frames in a row (the slow path). Whole-image
+        OpenCV passes: count the frames each pixel has been held, zero outside, cap."""
         shape = self._fg.shape
         if self._held_for is None or self._held_for.shape != shape:
             self._held_for = np.zeros(shape, np.uint16)
-        inside = box_cover(self._held_boxes, shape)
+        inside = box_cover(self._held_boxes, shape)  # 0/255
+        outside = cv2.bitwise_not(inside)
         held = self._held_for
-        np.add(held, 1, out=held, where=inside)  # consecutive frames held
-        held[~inside] = 0
-        np.minimum(held, self.hold + 1, out=held)
-        learn = (held == 0) | (held > self.hold)
-        return learn.view(np.uint8)
-
+        cv2.add(held, 1.0, dst=held, mask=inside)  # consecutive frames held
+        cv2.bitwise_and(held, 0.0, dst=held, mask=outside)  # none outside the boxes
+        cv2.min(held, float(self.hold + 1), dst=held)
+        over = cv2.compare(held, float(self.hold), cv2.CMP_GT)  # held too long: learnt
+        return cv2.bitwise_or(over, outside)
 
     def _remove_ghosts(self, grey: NDArray[np.uint8]) -> None:
         """Reset the pixels of the ghost blobs of the raw mask to the frame (option
@@ -190,22 +192,24 @@ class DisturbanceMap(FrontEnd):
         self._fg[sel] = 0
 
 
-def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.bool_]:
-    """The pixels of an image of ``shape`` (H, W) inside any of the boxes ``tlwh`` (K, 4),
-    without a loop over the boxes: each box adds +1 / −1 at its four corners of a
-    difference image whose 2-D prefix sum counts the boxes over each pixel."""
+def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.uint8]:
+    """The pixels of an image of ``shape`` (H, W) inside any of the boxes ``tlwh`` (K, 4), as
+    a 0/255 mask. A box covers the pixels from ``floor(left)`` to ``ceil(left + width) - 1``,
+    the same for rows. No loop over the boxes: each adds ±1 at its four corners of a
+    difference image, whose 2-D prefix sum (``cv2.integral``) counts the boxes over each
+    pixel."""
     h, w = shape[0], shape[1]
     b = np.asarray(tlwh, np.float64).reshape(-1, 4)
     x0 = np.clip(np.floor(b[:, 0]), 0, w).astype(np.intp)
     y0 = np.clip(np.floor(b[:, 1]), 0, h).astype(np.intp)
     x1 = np.clip(np.ceil(b[:, 0] + b[:, 2]), 0, w).astype(np.intp)
     y1 = np.clip(np.ceil(b[:, 1] + b[:, 3]), 0, h).astype(np.intp)
-    diff = np.zeros((h + 1, w + 1), np.int32)
-    np.add.at(diff, (y0, x0), 1)
-    np.add.at(diff, (y0, x1), -1)
-    np.add.at(diff, (y1, x0), -1)
-    np.add.at(diff, (y1, x1), 1)
-    return diff.cumsum(0).cumsum(1)[:h, :w] > 0
+    corners = np.concatenate([y0 * (w + 1) + x0, y0 * (w + 1) + x1, y1 * (w + 1) + x0,
+                              y1 * (w + 1) + x1])
+    sign = np.repeat(np.array([1.0, -1.0, -1.0, 1.0], np.float32), len(b))
+    diff = np.bincount(corners, sign, minlength=(h + 1) * (w + 1)).astype(np.float32)
+    count = cv2.integral(diff.reshape(h + 1, w + 1), sdepth=cv2.CV_32F)[1 : h + 1, 1 : w + 1]
+    return cv2.compare(count, 0.5, cv2.CMP_GT)
 
 
 class FrameDifference(FrontEnd):

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.detection.feedback import predicted_boxes
-from mvtrack.detection.splitmerge import PLAIN, split_merge
+from mvtrack.detection.splitmerge import PLAIN, _overlap, split_merge
 from mvtrack.types import Detections, TrackFrame
 
 Image = NDArray[np.uint8]
@@ -62,7 +62,9 @@ class TrackSplit:
         """The front end's detections of ``frame``, split and merged by the predicted boxes."""
         dets = self.inner(frame, index)
         mask = getattr(self.inner, "mask", None)
-        if mask is None or len(dets) == 0 or len(self.predicted) == 0:
+        if mask is None or len(dets) == 0 or len(self.predicted) == 0 or (
+            not self.merge and not self._shared(dets.tlwh)
+        ):
             self.flags = np.full(len(dets), PLAIN, np.int8)
             return dets
         boxes, flags = split_merge(dets.tlwh, mask, self.predicted, None, inside=self.inside,
@@ -71,6 +73,14 @@ class TrackSplit:
         if len(boxes) == len(dets) and not flags.any():
             return dets  # nothing split or merged: the blobs as they were (their areas kept)
         return Detections.from_tlwh(dets.frame, boxes)
+
+    def _shared(self, blobs: Any) -> bool:
+        """Whether a blob holds ``cover`` of two or more predicted boxes (without merging,
+        :func:`~mvtrack.detection.splitmerge.split_merge` changes nothing otherwise)."""
+        pred = self.predicted
+        area = np.maximum(pred[:, 2] * pred[:, 3], 1e-9)
+        held = _overlap(np.asarray(blobs, np.float64), pred) >= self.cover * area[None, :]
+        return bool((np.count_nonzero(held, axis=1) >= 2).any())
 
     def observe(self, dets: Detections, tracks: TrackFrame) -> None:
         """Keep the confirmed tracks' boxes predicted for the next frame (and hand the
