@@ -87,6 +87,9 @@ def test_box_cover_matches_filling_the_boxes_one_by_one(seed) -> None:
         ref[y0:y1, x0:x1] = True
     np.testing.assert_array_equal(box_cover(boxes, shape), 255 * ref.astype(np.uint8))
     assert not box_cover(np.zeros((0, 4)), shape).any()
+    big = np.vstack([boxes, [[-5.0, -5.0, 60.0, 30.0]]])  # most of the image: prefix sums
+    ref[:25, :55] = True
+    np.testing.assert_array_equal(box_cover(big, shape), 255 * ref.astype(np.uint8))
     assert not box_cover(np.array([[5.0, 5.0, 0.0, 3.0]]), shape).any()  # empty box
 
 

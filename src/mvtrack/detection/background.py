@@ -195,18 +195,28 @@ class DisturbanceMap(FrontEnd):
 def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.uint8]:
     """The pixels of an image of ``shape`` (H, W) inside any of the boxes ``tlwh`` (K, 4), as
     a 0/255 mask. A box covers the pixels from ``floor(left)`` to ``ceil(left + width) - 1``,
-    the same for rows. No loop over the boxes: each adds ±1 at its four corners of a
+    the same for rows. No loop over the boxes: the indices of all their pixels at once when
+    they cover little of the image; else each box adds ±1 at its four corners of a
     difference image, whose 2-D prefix sum (``cv2.integral``) counts the boxes over each
     pixel."""
     h, w = shape[0], shape[1]
     b = np.asarray(tlwh, np.float64).reshape(-1, 4)
-    x0 = np.clip(np.floor(b[:, 0]), 0, w).astype(np.intp)
-    y0 = np.clip(np.floor(b[:, 1]), 0, h).astype(np.intp)
-    x1 = np.clip(np.ceil(b[:, 0] + b[:, 2]), 0, w).astype(np.intp)
-    y1 = np.clip(np.ceil(b[:, 1] + b[:, 3]), 0, h).astype(np.intp)
+    ends = np.concatenate([np.floor(b[:, :2]), np.ceil(b[:, :2] + b[:, 2:])], axis=1)
+    np.minimum(np.maximum(ends, 0.0, out=ends), (w, h, w, h), out=ends)
+    x0, y0, x1, y1 = ends.astype(np.intp).T
+    bw, bh = np.maximum(x1 - x0, 0), np.maximum(y1 - y0, 0)
+    n = bw * bh  # pixels per box
+    total = int(n.sum())
+    if total <= h * w // 8:  # small boxes: write their pixels
+        out = np.zeros((h, w), np.uint8)
+        if total:
+            off = np.arange(total) - np.repeat(np.cumsum(n) - n, n)  # index within the box
+            wr = np.repeat(np.maximum(bw, 1), n)
+            out[np.repeat(y0, n) + off // wr, np.repeat(x0, n) + off % wr] = 255
+        return out
     corners = np.concatenate([y0 * (w + 1) + x0, y0 * (w + 1) + x1, y1 * (w + 1) + x0,
                               y1 * (w + 1) + x1])
-    sign = np.repeat(np.array([1.0, -1.0, -1.0, 1.0], np.float32), len(b))
+    sign = np.repeat(np.array([1.0, -1.0, -1.0, 1.0]), len(b))
     diff = np.bincount(corners, sign, minlength=(h + 1) * (w + 1)).astype(np.float32)
     count = cv2.integral(diff.reshape(h + 1, w + 1), sdepth=cv2.CV_32F)[1 : h + 1, 1 : w + 1]
     return cv2.compare(count, 0.5, cv2.CMP_GT)
