@@ -13,7 +13,9 @@ frame ``k_e`` within the window:
   with ``v`` the track's mean velocity over its last one to two seconds of output rows (the
   filter's last velocity is distorted as the object disappears behind the occluder: its box
   shrinks from one side);
-- **size**: the heights differ by at most the factor ``size_ratio``;
+- **size**: the heights differ by at most the factor ``size_ratio`` (the ended track's height
+  averaged over its measured rows like its appearance: its last box shrinks as it disappears;
+  the new track's first box), and ``h``, ``h'`` above are these heights;
 - **appearance**: the Bhattacharyya coefficient of the histograms,
   :math:`\sum_b \sqrt{a_b a'_b} \ge` ``min_similarity``.
 
@@ -144,6 +146,7 @@ class Relinker:
         self._ids = np.zeros(1, np.int64)  # tracker ID -> shown ID (0: not seen yet)
         self._app = np.zeros((1, BINS))  # tracker ID -> appearance
         self._has_app = np.zeros(1, bool)
+        self._height = np.zeros(1)  # tracker ID -> box height, averaged like the appearance
         self._last = np.zeros((1, 7))  # tracker ID -> frame, x, y, vx, vy, w, h of last row
         # tracker ID -> frame, x, y of a row one to two seconds back, and of one up to a
         # second back (the mean velocity's start, and the next start)
@@ -213,6 +216,7 @@ class Relinker:
         self._ids = np.concatenate([self._ids, np.zeros(m - self._ids.shape[0], np.int64)])
         self._app = np.concatenate([self._app, np.zeros((m - self._app.shape[0], BINS))])
         self._has_app = np.concatenate([self._has_app, np.zeros(m - self._has_app.size, bool)])
+        self._height = np.concatenate([self._height, np.zeros(m - self._height.size)])
         self._last = np.concatenate([self._last, np.zeros((m - self._last.shape[0], 7))])
         self._anchor = np.concatenate([self._anchor, np.zeros((m - self._anchor.shape[0], 3))])
         self._mid = np.concatenate([self._mid, np.zeros((m - self._mid.shape[0], 3))])
@@ -226,6 +230,7 @@ class Relinker:
         old = self._app[ids]
         first = ~self._has_app[ids]
         self._app[ids] = np.where(first[:, None], hist, (1 - a) * old + a * hist)
+        self._height[ids] = np.where(first, wh[:, 1], (1 - a) * self._height[ids] + a * wh[:, 1])
         self._has_app[ids] = True
 
     def _link(self, new: IntArray) -> None:
@@ -236,10 +241,12 @@ class Relinker:
         gap = nl[:, 0][:, None] - gl[:, 0][None, :]  # (new, ended) frames
         pred = gl[None, :, 1:3] + gl[None, :, 3:5] * gap[..., None]
         dist = np.linalg.norm(nl[:, None, 1:3] - pred, axis=2)
-        tall = np.maximum(nl[:, 6][:, None], gl[:, 6][None, :])
+        # heights: the ended track's average over its measured rows (its last box shrinks as
+        # it disappears behind the occluder), the new track's first box
+        hn, hg = self._height[new][:, None], self._height[g][None, :]
+        tall = np.maximum(hn, hg)
         radius = s.reach * tall
-        ratio = np.maximum(nl[:, 6][:, None], gl[:, 6][None, :]) / np.maximum(
-            np.minimum(nl[:, 6][:, None], gl[:, 6][None, :]), 1e-9)
+        ratio = tall / np.maximum(np.minimum(hn, hg), 1e-9)
         sim = np.sqrt(self._app[new][:, None, :] * self._app[g][None, :, :]).sum(axis=2)
         both = self._has_app[new][:, None] & self._has_app[g][None, :]
         ok = (gap > 0) & (dist <= radius) & (ratio <= s.size_ratio) & both & (
