@@ -153,6 +153,11 @@ def test_intersection_report(monkeypatch) -> None:
     assert f["counts_exact_runs_true_tracks"] == 1
     got = kf["counts_per_run"][0]
     assert sum(got.values()) > 20 and kf["counts_exact_runs"] == 0  # spurious tracks count
+    # the default as mvtrack track runs it (tracked pixels held, merged blobs divided, tracks
+    # ending at the image's edge): paper 1's counts exactly, both waiting vehicles kept
+    d = v["default"]
+    assert d["counts_per_run"] == f["counts_from_true_tracks"] and d["counts_exact_runs"] == 1
+    assert d["waiting_keep_id"]["k"] == 2 and d["spurious_median"] == 0
     assert any(r[0].startswith("counting module") for r in rep.rows)
 
 
