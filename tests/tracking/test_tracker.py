@@ -233,6 +233,7 @@ def test_physical_units_give_the_same_behaviour_at_10_and_30_fps(fps: float) -> 
     config = TrackerConfig(
         fps=fps, max_coast=0.5, confirm_hits=2, init_velocity_std=120.0, accel_std=30.0,
         distance="euclidean", gate=15.0**2, coast_output=None,
+        relink_window=None,  # the life cycle alone (relinking: test_tracker_relink.py)
     )
     log = track_detections(_frames({0: a}, n), config)
     c = log.columns()

@@ -68,8 +68,11 @@ def test_a_track_lives_on_low_score_boxes_through_a_partial_occlusion():
     ids = _ids_at(_run(frames, CFG), frames, person)
     assert ids[1:] == [1] * (n - 1)  # confirmed on frame 1, one ID throughout
     # with the weak boxes dropped instead, the track ends and the person comes back as new
-    dropped = _run(frames, CFG.replace(min_score=0.5))
+    # (and relinking, when on, hands the old ID to the new track)
+    dropped = _run(frames, CFG.replace(min_score=0.5, relink_window=None))
     assert set(_ids_at(dropped, frames, person)[31:]) == {2}  # born at 30, confirmed at 31
+    relinked = _run(frames, CFG.replace(min_score=0.5))
+    assert set(_ids_at(relinked, frames, person)[31:]) == {1}
 
 
 def test_a_duplicate_box_beside_a_tracked_person_starts_nothing():

@@ -328,7 +328,8 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
     other = resolve_settings(RunSettings(detector="mog2"), (320, 240))
     assert other.detector_params == {"min_area": 40.0, "close_size": 7}
     assert small.tracker == {"measurement_std": 2.0, "size_gate": None,  # blobs: no size gate
-                             "frame_size": [320.0, 240.0]}  # tracks end where they leave
+                             "frame_size": [320.0, 240.0],  # tracks end where they leave
+                             "relink_window": None}  # the loop relinks with appearance
     big = resolve_settings(RunSettings(detector=DM), (640, 480))  # s² = 4
     assert big.detector_params["min_area"] == 160.0 and big.detector_params["close_size"] == 7
     assert big.tracker["measurement_std"] == 4.0
@@ -343,7 +344,7 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
     assert mine.detector_params["min_area"] == 5.0
     tiny = resolve_settings(RunSettings(detector=DM), (96, 64))
     assert tiny.tracker == {"measurement_std": 2.0, "size_gate": None,
-                            "frame_size": [96.0, 64.0]}
+                            "frame_size": [96.0, 64.0], "relink_window": None}
     assert tiny.detector_params["min_area"] == 3.0
     paper = resolve_settings(RunSettings(tracker={"preset": "paper1"}), (640, 480))
     assert paper.tracker == {"preset": "paper1"}

@@ -210,6 +210,19 @@ class TrackerConfig:
         the same edge). ``None`` (the default, a tracker that does not know the image) keeps the
         coasting rule alone; the video pipeline sets it for the ``default`` preset
         (:func:`mvtrack.video.resolve_settings`).
+    relink_window : float or None
+        Seconds. A track confirmed within this time after a confirmed track was deleted, where
+        that track's last measurement and velocity put it now (within ``relink_reach`` times
+        the shorter side of the two boxes) and of a similar height, takes its public ID
+        (:mod:`mvtrack.tracking.relink`): a person lost for longer than ``max_coast`` keeps the
+        identity. ``None`` disables it; the paper presets and the video pipeline do (the video
+        loop relinks with appearance as well, :mod:`mvtrack.video.relink`). Default 2 s and
+        ``relink_reach`` 1, chosen by leave-one-sequence-out on the MOT15 development sequences
+        among the settings that leave the noisy-ground-truth benchmark as it was
+        (``docs/bench/mot15-defaults.md``).
+    relink_reach : float
+        The radius of that test in units of the shorter box side (two people side by side are
+        about one body width apart).
     backfill : bool
         Offline runs only (:func:`~mvtrack.tracking.track_detections`): once a track is
         confirmed, the rows of its tentative frames — from its first detection on — are
@@ -254,6 +267,8 @@ class TrackerConfig:
     min_score: float = 0.2
     nms_iou: float | None = None
     frame_size: tuple[float, float] | None = None
+    relink_window: float | None = 2.0
+    relink_reach: float = 1.0
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -335,6 +350,11 @@ class TrackerConfig:
                 raise bad(name, f"must be a number in [0, 1]{tail}")
         if self.nms_iou is not None and self.nms_iou <= 0:
             raise bad("nms_iou", "must be > 0 or None")
+        rw = self.relink_window
+        if rw is not None and not _finite_positive(rw):
+            raise bad("relink_window", "must be a finite number of seconds > 0 or None")
+        if not _finite_positive(self.relink_reach):
+            raise bad("relink_reach", "must be a finite number > 0")
         fs = self.frame_size
         if fs is not None:
             if not (isinstance(fs, (tuple, list)) and len(fs) == 2

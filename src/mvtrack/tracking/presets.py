@@ -27,6 +27,7 @@ _PAPER_COMMON: dict[str, Any] = {
     "score_high": None,
     "min_score": 0.0,
     "min_track_length": None,
+    "relink_window": None,
     "warmup": True,
     "warmup_hits": 6,
 }

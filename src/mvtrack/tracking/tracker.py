@@ -42,8 +42,10 @@ from mvtrack.tracking.lifecycle import (
     hand_out_ids,
     next_state,
 )
+from mvtrack.tracking.relink import empty_gallery, pair_new_tracks
 from mvtrack.tracking.stages import Associator
 from mvtrack.tracking.table import (
+    AGE,
     BIRTH_COLS,
     LAST_K,
     LAST_XY,
@@ -139,6 +141,8 @@ class Tracker:
         #: the association stages (gate centres, first stage, second gate, recovery, low)
         self.associator = Associator(self.config, self.predictor)
         self._birth_row = np.array([0, -1, TENTATIVE, 1, 0, 1, 0, 0], dtype=np.int64)
+        rw = self.config.relink_window
+        self._relink_window = 0 if rw is None else max(1, round(rw * self.config.fps))
         self._uid_ramp = uid_ramp(16)
         self.reset()
 
@@ -150,6 +154,7 @@ class Tracker:
         self.row_uids = np.zeros(0, dtype=np.int64)
         self._next_uid = 0
         self._next_id = 1
+        self._gone = empty_gallery()  # confirmed tracks ended within the relink window
         if self.associator.scores is not None:
             self.associator.scores.reset()
 
@@ -270,7 +275,11 @@ class Tracker:
             out_x = (gxy[:, 0] < 0) | (gxy[:, 0] >= size[0])
             delete |= ~held & (out_x | (gxy[:, 1] < 0) | (gxy[:, 1] >= size[1]))
         ints[:, STATE] = state
+        if self._relink_window:
+            self._keep_ended(ints, flo, ps, delete)
         if np.count_nonzero(confirmed_now):
+            if self._relink_window and self._gone[0].size:
+                self._relink(ints, flo, confirmed_now, z)  # old IDs for some, in place
             self._next_id = hand_out_ids(ints, confirmed_now, self._next_id)
         show = ~delete if self.config.output_tentative else ~delete & (state != TENTATIVE)
         if fp.coast_output is not None:  # long coasting: alive, but no longer output
@@ -289,6 +298,36 @@ class Tracker:
             tab = tab.take(keep)
             ps = take_state(ps, keep)
         return tab, ps, (out, oi[:, UID])
+
+    def _keep_ended(self, ints: Any, flo: Any, ps: Any, delete: BoolArray) -> None:
+        """Add the confirmed tracks deleted this frame to the relink gallery and forget
+        those that ended more than ``relink_window`` ago (:mod:`mvtrack.tracking.relink`)."""
+        tid, kg, fg = self._gone
+        gone = (delete & (ints[:, TID] > 0)).nonzero()[0]
+        if gone.size:
+            rows = np.column_stack([flo[gone][:, LAST_XY], self.predictor.velocity(ps)[gone],
+                                    flo[gone][:, WH]])
+            tid = np.concatenate([tid, ints[gone, TID]])
+            kg = np.concatenate([kg, ints[gone, LAST_K]])
+            fg = np.concatenate([fg, rows])
+        live = self._k - kg <= self._relink_window
+        self._gone = (tid[live], kg[live], fg[live])
+
+    def _relink(self, ints: Any, flo: Any, confirmed_now: BoolArray, z: FloatArray) -> None:
+        """Give the tracks confirmed now that continue an ended one its public ID (in place;
+        they leave ``confirmed_now`` and the gallery)."""
+        rows = confirmed_now.nonzero()[0]
+        born = self._k - ints[rows, AGE] + 1
+        fp = self._fp
+        shown = fp.coast_output if fp.coast_output is not None else fp.max_misses
+        a, b = pair_new_tracks(z[rows], flo[rows][:, WH], born, self._k, self._gone,
+                               self.config.relink_reach, self._relink_window, shown)
+        if a.size:
+            ints[rows[a], TID] = self._gone[0][b]
+            confirmed_now[rows[a]] = False
+            keep = np.ones(self._gone[0].size, bool)
+            keep[b] = False
+            self._gone = tuple(x[keep] for x in self._gone)
 
     def _frame(self, frame: int, out: tuple | None, born: tuple | None) -> TrackFrame:
         """This frame's :class:`TrackFrame`: the existing tracks' rows ``out``, then the new

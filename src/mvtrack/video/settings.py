@@ -84,6 +84,8 @@ def resolve_settings(
         tracker.setdefault("size_gate", None)
         # a track that coasts out of the image ends there (TrackerConfig.frame_size)
         tracker.setdefault("frame_size", [float(w), float(h)])
+        # the video loop relinks with appearance too (mvtrack.video.relink)
+        tracker.setdefault("relink_window", None)
         up = max(s2, 1.0)  # smaller images keep the 320×240 values
         if not {"predictor_params", "measurement_std"} & set(tracker):
             tracker["measurement_std"] = round(2.0 * up**0.5, 3)  # r = 4 s² px²
