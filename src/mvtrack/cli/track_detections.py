@@ -179,6 +179,8 @@ def output_policy(config: TrackerConfig, coasting: bool) -> str:
         parts.append("from their first detection (backfill)")
     if config.interpolate:
         parts.append("gaps interpolated")
+    if config.relink_window is not None:
+        parts.append(f"a track lost up to {config.relink_window:g} s continued under its ID")
     if config.min_track_length:
         parts.append(f"tracks shorter than {config.min_track_length:g} s left out")
     if config.score_high is not None:
