@@ -21,7 +21,7 @@ over the file::
     gates = true              # draw the gate regions
 
     [relink]                  # a track ended behind an occluder continued by a new one
-    enabled = true            # then any field of mvtrack.video.relink.RelinkSettings
+    enabled = true            # then any field of RelinkSettings (below)
     window = 2.0              # seconds
 
     [analytics]               # counts, movements and speeds (mvtrack.analytics.settings)
@@ -40,30 +40,77 @@ when those are built (:mod:`mvtrack.video.build`).
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from mvtrack.errors import InputError
 from mvtrack.registry import DEFAULT_DETECTOR, DETECTORS
 
-if TYPE_CHECKING:
-    from mvtrack.video.relink import RelinkSettings
+
+@dataclasses.dataclass(frozen=True)
+class RelinkSettings:
+    """The ``[relink]`` table: how the video loop continues a track that ended behind an
+    occluder (:mod:`mvtrack.video.relink`).
+
+    Attributes
+    ----------
+    enabled : bool
+        Relink at all.
+    window : float
+        Seconds after its end during which a track can be continued.
+    reach : float
+        Radius of the motion test as a share of the taller box.
+    min_similarity : float
+        Least Bhattacharyya coefficient of the appearances, in [0, 1].
+    size_ratio : float
+        Largest ratio of the two box heights (> 1).
+    smoothing : float
+        Weight in (0, 1] of a new measured box in the appearance's exponential average.
+    """
+
+    enabled: bool = True
+    window: float = 2.0
+    reach: float = 0.5
+    min_similarity: float = 0.8
+    size_ratio: float = 1.6
+    smoothing: float = 0.1
+
+    def __post_init__(self) -> None:
+        ranges = {  # name: the test of a number
+            "window": lambda v: v > 0, "reach": lambda v: v > 0,
+            "min_similarity": lambda v: 0.0 <= v <= 1.0,
+            "size_ratio": lambda v: v > 1.0, "smoothing": lambda v: 0.0 < v <= 1.0,
+        }
+        for name, ok in ranges.items():
+            value = getattr(self, name)
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not number or not math.isfinite(value) or not ok(value):
+                raise ValueError(f"relink.{name} is out of range (got {value!r})")
+        if not isinstance(self.enabled, bool):
+            raise ValueError(f"relink.enabled must be true or false (got {self.enabled!r})")
 
 
-def _default_relink() -> RelinkSettings:
-    from mvtrack.video.relink import RelinkSettings
-
-    return RelinkSettings()
+def relink_settings(table: dict[str, Any] | None) -> RelinkSettings:
+    """:class:`RelinkSettings` from a ``[relink]`` table (``None``: the defaults)."""
+    if not table:
+        return RelinkSettings()
+    known = {f.name for f in dataclasses.fields(RelinkSettings)}
+    unknown = sorted(set(table) - known)
+    if unknown:
+        raise ValueError(f"relink: unknown key {', '.join(map(repr, unknown))} (known: "
+                         f"{', '.join(sorted(known))})")
+    return RelinkSettings(**table)
 
 _TABLES: dict[str, tuple[str, ...]] = {
     "tracker": (),  # checked against TrackerConfig fields (plus "preset")
     "detector": (),  # "name" plus the detector's parameters
     "templates": (),  # "enabled" plus TemplateBank parameters
     "video": ("write", "trail", "gates"),
-    "relink": (),  # checked against mvtrack.video.relink.RelinkSettings
+    "relink": (),  # checked against RelinkSettings
     "analytics": (),  # checked by mvtrack.analytics.settings
 }
 
@@ -107,7 +154,7 @@ class RunSettings:
     trail: int = 30
     gates: bool = True
     analytics: dict[str, Any] | None = None
-    relink: RelinkSettings = field(default_factory=_default_relink)
+    relink: RelinkSettings = field(default_factory=RelinkSettings)
 
     def with_overrides(self, **tracker_overrides: Any) -> RunSettings:
         """A copy with the non-None ``tracker_overrides`` (CLI options) applied."""
@@ -211,8 +258,6 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
         from mvtrack.analytics.settings import settings_from_dict
 
         settings_from_dict(analytics, path)  # every key checked now, before any tracking
-
-    from mvtrack.video.relink import relink_settings
 
     relink_table = data.get("relink")
     if relink_table is not None and not isinstance(relink_table, dict):

@@ -78,6 +78,7 @@ def test_bad_config_key_is_one_line_error_and_writes_nothing(tmp_path, capsys) -
         ("[relink]\nwindow = -1.0\n", "relink.window"),
         ("[relink]\nwidnow = 1.0\n", "widnow"),
         ('[relink]\nenabled = "yes"\n', "relink.enabled"),
+        ('[relink]\nreach = "x"\n', "relink.reach"),
     ],
 )
 def test_config_errors_name_the_key(tmp_path, text: str, needle: str) -> None:

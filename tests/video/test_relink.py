@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack.config import RunSettings
+from mvtrack.config import RelinkSettings, RunSettings
 from mvtrack.types import TrackFrame, TrackState
 from mvtrack.video.relink import (
     BINS,
@@ -16,7 +16,6 @@ from mvtrack.video.relink import (
     MIN_SATURATION,
     SATS,
     Relinker,
-    RelinkSettings,
     box_histograms,
 )
 from mvtrack.video.run import track_to_folder

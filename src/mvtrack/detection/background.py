@@ -156,13 +156,16 @@ class DisturbanceMap(FrontEnd):
             cv2.accumulateWeighted(grey, self.background, self.beta(k))
         return self._fg
 
-    def observe(self, dets: Detections, tracks: TrackFrame) -> None:
+    def observe(self, dets: Detections, tracks: TrackFrame, predicted: Any = None) -> None:
         """Keep the confirmed tracks' boxes predicted for the next frame (option ``hold``;
-        the video loop calls this after each tracker step)."""
+        the video loop calls this after each tracker step; ``predicted``: those boxes when
+        the caller has them already, :func:`~mvtrack.detection.feedback.predicted_boxes`)."""
         if self.hold:
-            from mvtrack.detection.feedback import predicted_boxes
+            if predicted is None:
+                from mvtrack.detection.feedback import predicted_boxes
 
-            self._held_boxes = predicted_boxes(tracks)
+                predicted = predicted_boxes(tracks)
+            self._held_boxes = predicted
 
     def _learnt_pixels(self) -> NDArray[np.uint8]:
         """The mask of the pixels :math:`B` learns this frame under ``hold``: those outside

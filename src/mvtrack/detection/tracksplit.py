@@ -88,4 +88,4 @@ class TrackSplit:
         self.predicted = predicted_boxes(tracks)
         inner = getattr(self.inner, "observe", None)
         if inner is not None:
-            inner(dets, tracks)
+            inner(dets, tracks, self.predicted)

@@ -150,6 +150,14 @@ def scores_of(rescuer: Any) -> HeldScores:
     return NO_SCORES if held is None else HeldScores(*held)
 
 
+def shown_scores(rescuer: Any, relink: Any = None) -> HeldScores:
+    """:func:`scores_of` with the IDs the relinker shows (``relink`` None: as they are)."""
+    held = scores_of(rescuer)
+    if relink is not None and held.track_id.size:
+        held = HeldScores(relink.shown(held.track_id), held.score)
+    return held
+
+
 def progress_bar(total: int | None, desc: str, enabled: bool | None = None) -> Any:
     """A tqdm bar on stderr, shown only when stderr is a terminal (or ``enabled``)."""
     from tqdm import tqdm
@@ -242,15 +250,12 @@ def run_frames(
                 result.flags.append(flags_of(detector, len(dets)))
             if rescuer is not None:
                 rescuer.observe(image, dets, tracks)
-            held = scores_of(rescuer)
             if relink is not None:
                 live = getattr(getattr(tracker, "tracks", None), "track_id", None)
                 tracks = relink(image, tracks, live)
-                if held.track_id.size:
-                    held = HeldScores(relink.shown(held.track_id), held.score)
             if keep:
                 result.tracks.append(tracks)
-                result.scores.append(held)
+                result.scores.append(shown_scores(rescuer, relink))
             result.n_frames = k + 1
             result.n_detections += len(dets)
             if on_frame is not None:

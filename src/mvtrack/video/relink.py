@@ -34,13 +34,13 @@ The histogram: pixels of the box's central part (x from 20 % to 80 % of the widt
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
+from mvtrack.config import RelinkSettings
 from mvtrack.types import TrackFrame
 
 Image = NDArray[np.uint8]
@@ -85,47 +85,6 @@ def box_histograms(image: Image, tlwh: FloatArray, step: int = 2) -> FloatArray:
     bins = np.where(chroma, hue_bin, grey_bin)
     hist = np.bincount(box * BINS + bins, minlength=k * BINS).reshape(k, BINS).astype(float)
     return hist / np.maximum(hist.sum(axis=1, keepdims=True), 1.0)
-
-
-@dataclasses.dataclass(frozen=True)
-class RelinkSettings:
-    """The ``[relink]`` table of the settings (module docstring).
-
-    Attributes
-    ----------
-    enabled : bool
-        Relink at all.
-    window : float
-        Seconds after its end during which a track can be continued.
-    reach : float
-        Radius of the motion test as a share of the taller box.
-    min_similarity : float
-        Least Bhattacharyya coefficient of the appearances, in [0, 1].
-    size_ratio : float
-        Largest ratio of the two box heights (> 1).
-    smoothing : float
-        Weight in (0, 1] of a new measured box in the appearance's exponential average.
-    """
-
-    enabled: bool = True
-    window: float = 2.0
-    reach: float = 0.5
-    min_similarity: float = 0.8
-    size_ratio: float = 1.6
-    smoothing: float = 0.1
-
-    def __post_init__(self) -> None:
-        checks = {
-            "window": self.window > 0, "reach": self.reach > 0,
-            "min_similarity": 0.0 <= self.min_similarity <= 1.0,
-            "size_ratio": self.size_ratio > 1.0, "smoothing": 0.0 < self.smoothing <= 1.0,
-        }
-        for name, ok in checks.items():
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not ok:
-                raise ValueError(f"relink.{name} is out of range (got {value!r})")
-        if not isinstance(self.enabled, bool):
-            raise ValueError(f"relink.enabled must be true or false (got {self.enabled!r})")
 
 
 class Relinker:
@@ -261,15 +220,3 @@ class Relinker:
         self.links += [(int(self._ids[g[j]]), int(new[i]), int(nl[i, 0]))
                        for i, j in zip(r, c, strict=True)]
         self._ended = np.delete(g, c)
-
-
-def relink_settings(table: dict[str, Any] | None) -> RelinkSettings:
-    """:class:`RelinkSettings` from a ``[relink]`` table (``None``: the defaults)."""
-    if not table:
-        return RelinkSettings()
-    known = {f.name for f in dataclasses.fields(RelinkSettings)}
-    unknown = sorted(set(table) - known)
-    if unknown:
-        raise ValueError(f"relink: unknown key {', '.join(map(repr, unknown))} (known: "
-                         f"{', '.join(sorted(known))})")
-    return RelinkSettings(**table)

@@ -125,7 +125,7 @@ def track_to_folder(
 
     from mvtrack.io.atomic import atomic_path, write_json
     from mvtrack.tracking import TrackLog
-    from mvtrack.video.loop import HeldScores, flags_of, scores_of
+    from mvtrack.video.loop import flags_of, shown_scores
     from mvtrack.video.relink import Relinker
     from mvtrack.video.stream import StreamingOutput
     from mvtrack.viz.annotate import TrailBuffer, annotate_frame
@@ -180,10 +180,7 @@ def track_to_folder(
             if stream is None:
                 log.append(tracks)
             else:
-                held = scores_of(rescuer)
-                if relinker is not None and held.track_id.size:
-                    held = HeldScores(relinker.shown(held.track_id), held.score)
-                stream.add(tracks, flags_of(detector, len(dets)), held)
+                stream.add(tracks, flags_of(detector, len(dets)), shown_scores(rescuer, relinker))
             if k == 0:
                 background.append(image.copy())
             shot = snapshot is not None and k == snapshot
