@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.tracking.scores import ScoreCalibration, check_scale, duplicates
+from mvtrack.tracking.scores import ScoreCalibration, check_scale, duplicates, isolated
 
 
 def test_auto_is_the_empirical_distribution_of_the_run_so_far():
@@ -67,6 +67,24 @@ def test_duplicates_greedy_suppression_by_hand():
     assert dup.tolist() == [True, False, True, False]
     # above the threshold nothing is a duplicate
     assert not duplicates(xy, wh, np.array([3.0, 2.0, 1.0, 0.5]), 0.61).any()
+
+
+def test_isolated_boxes_by_hand():
+    # candidates A, B (IoU 0.6 with each other), C; D far away; others: one box over C
+    xy = np.array([[10.0, 10.0], [12.5, 10.0], [50.0, 50.0], [100.0, 100.0]])
+    wh = np.full((4, 2), 10.0)
+    others = np.array([[47.5, 45.0, 10.0, 10.0]])  # C's box shifted by (2.5, 0): IoU 0.6
+    score = np.array([1.0, 2.0, 3.0, 4.0])
+    # C overlaps a track; of A and B, the better-scored B stays; D is alone
+    assert isolated(xy, wh, score, others, 0.5).tolist() == [False, True, False, True]
+    # a threshold above every overlap: all of them (A and B no longer duplicates either)
+    assert isolated(xy, wh, score, others, 0.61).all()
+    # B over a second track box (centre (15, 10): IoU 0.6 with B, 0.33 with A): B goes, and
+    # A, which only B suppressed, stays
+    others2 = np.concatenate([others, [[10.0, 5.0, 10.0, 10.0]]])
+    assert isolated(xy, wh, score, others2, 0.5).tolist() == [True, False, False, True]
+    # nothing to compare with: every box, less the duplicates
+    assert isolated(xy, wh, score, np.zeros((0, 4)), 0.5).tolist() == [False, True, True, True]
 
 
 def test_pending_scores_give_the_same_calibration_as_one_sorted_sample():

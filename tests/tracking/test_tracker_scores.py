@@ -59,6 +59,41 @@ def test_a_low_score_box_never_starts_a_track():
     assert set(_run(frames, CFG.replace(score_high=None)).track_ids.tolist()) == {1, 2}
 
 
+def test_an_isolated_low_box_starts_a_track_only_a_high_box_confirms():
+    n = 12
+    person = _walker(n)
+    score = np.full(n, 0.9)
+    score[:4] = 0.3  # weak for the first four frames, then strong
+    frames = _frames([(person, score)], n)
+    # the default: each weak box starts a tentative track, which the next weak box cannot
+    # confirm (tentative tracks take high boxes only); the first strong box (frame 4)
+    # confirms the one born on frame 3, so the person has an ID from frame 4 on
+    ids = _ids_at(_run(frames, CFG), frames, person)
+    assert ids == [0] * 4 + [1] * (n - 4)
+    # offline, the confirmed track is written from its first (weak) box on
+    off = track_detections(frames, CFG)
+    assert _ids_at(off, frames, person) == [0] * 3 + [1] * (n - 3)
+    # ByteTrack's rule (low_birth_iou=None): born on frame 4, confirmed on frame 5
+    strict = _run(frames, CFG.replace(low_birth_iou=None))
+    assert _ids_at(strict, frames, person) == [0] * 5 + [1] * (n - 5)
+    # a weak box beside a strong one on a frame with no track yet starts nothing
+    dup = np.where(np.arange(n)[:, None] < 4, person + [6.0, 4.0], np.nan)  # IoU 0.62
+    both = _frames([(person, np.full(n, 0.9)), (dup, np.full(n, 0.3))], n)
+    log = _run(both, CFG)
+    assert set(log.track_ids.tolist()) == {1}
+    assert _ids_at(log, both, person)[1:] == [1] * (n - 1)
+
+
+def test_low_tentative_lets_low_boxes_alone_make_a_track():
+    n = 20
+    clutter = np.tile([400.0, 300.0], (n, 1))  # a static, isolated box, low every frame
+    frames = _frames([(_walker(n), np.full(n, 0.9)), (clutter, np.full(n, 0.3))], n)
+    log = _run(frames, CFG.replace(low_tentative=True))
+    assert set(log.track_ids.tolist()) == {1, 2}
+    assert _ids_at(log, frames, clutter) == [0] + [2] * (n - 1)  # born on 0, confirmed on 1
+    assert _ids_at(_run(frames, CFG), frames, clutter) == [0] * n  # the default: never
+
+
 def test_a_track_lives_on_low_score_boxes_through_a_partial_occlusion():
     n = 40
     person = _walker(n)

@@ -202,6 +202,25 @@ class TrackerConfig:
     nms_iou : float or None
         Within a frame, a detection that overlaps a higher-scored one by at least this IoU is
         dropped before association (duplicate suppression); ``None`` disables it.
+    low_birth_iou : float or None
+        A low detection (``score_high``) left unassigned by every stage that overlaps no live
+        track's predicted box, no high detection and no better-scored such low detection by
+        this IoU or more starts a *tentative* track too. A tentative track is matched only in
+        the high stages, so it is confirmed (and output) only if a high detection joins it in
+        the next frame: a low box alone still never makes a track, while a person detected
+        weakly on one frame and well on the next is tracked from the weak box on. The second
+        boxes on an already-detected person and clutter beside people, which the low half of a
+        detector's boxes mostly is, overlap a track or a high box and start nothing. ``None``
+        (ByteTrack's rule): only high detections start tracks. Default 0.1, chosen by
+        leave-one-sequence-out on the MOT15 development sequences
+        (``docs/bench/mot15-defaults.md``).
+    low_tentative : bool
+        The low-score stage also serves tentative tracks, so a track born from an isolated
+        low box (``low_birth_iou``) can be confirmed by a second low box: a person whom the
+        detector scores low on consecutive frames is tracked, but so is a persistent low-score
+        false detection that overlaps nothing, which ByteTrack's rule (and the default,
+        ``False``) never lets make a track. Measured beside the default in
+        ``docs/bench/mot15-defaults.md``.
     frame_size : (float, float) or None
         Width and height of the image, pixels. A track that got no detection and whose
         prediction has left the image (``x ∉ [0, W)`` or ``y ∉ [0, H)``) ends at once: the
@@ -266,6 +285,8 @@ class TrackerConfig:
     score_high: float | None = 0.5
     min_score: float = 0.2
     nms_iou: float | None = None
+    low_birth_iou: float | None = 0.1
+    low_tentative: bool = False
     frame_size: tuple[float, float] | None = None
     relink_window: float | None = 2.0
     relink_reach: float = 1.0
@@ -300,7 +321,7 @@ class TrackerConfig:
             isinstance(g, (int, float)) and math.isfinite(g) and g > 1.0
         ):
             raise bad("size_gate", "must be a finite ratio > 1 or None")
-        for name in ("backfill", "interpolate"):
+        for name in ("backfill", "interpolate", "low_tentative"):
             if not isinstance(getattr(self, name), bool):
                 raise bad(name, "must be True or False")
         w = self.size_weight
@@ -341,15 +362,17 @@ class TrackerConfig:
             isinstance(mtl, (int, float)) and math.isfinite(mtl) and mtl >= 0
         ):
             raise bad("min_track_length", "must be a finite number of seconds >= 0 or None")
-        for name in ("score_high", "min_score", "nms_iou"):
+        for name in ("score_high", "min_score", "nms_iou", "low_birth_iou"):
             v = getattr(self, name)
             if v is None and name != "min_score":
                 continue
             if not isinstance(v, (int, float)) or not (0.0 <= v <= 1.0):
                 tail = "" if name == "min_score" else " or None"
                 raise bad(name, f"must be a number in [0, 1]{tail}")
-        if self.nms_iou is not None and self.nms_iou <= 0:
-            raise bad("nms_iou", "must be > 0 or None")
+        for name in ("nms_iou", "low_birth_iou"):
+            v = getattr(self, name)
+            if v is not None and v <= 0:
+                raise bad(name, "must be > 0 or None")
         rw = self.relink_window
         if rw is not None and not _finite_positive(rw):
             raise bad("relink_window", "must be a finite number of seconds > 0 or None")

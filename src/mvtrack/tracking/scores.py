@@ -23,7 +23,9 @@ read on a *calibrated* scale ``c ∈ [0, 1]`` given by ``TrackerConfig.score_sca
     a fixed linear scale: ``c = clip((s − lo) / (hi − lo), 0, 1)``.
 
 :func:`duplicates` finds, within one frame, the boxes that overlap a higher-scored box by an
-IoU of at least a threshold (greedy non-maximum suppression).
+IoU of at least a threshold (greedy non-maximum suppression); :func:`isolated`, the boxes that
+overlap none of some others (``TrackerConfig.low_birth_iou``: the low boxes that may start a
+tentative track).
 """
 
 from __future__ import annotations
@@ -181,3 +183,38 @@ def duplicates(
         if not dup[i]:
             dup |= over[i] & (rank > rank[i])
     return dup
+
+
+def isolated(
+    xy: FloatArray, wh: FloatArray, score: FloatArray, others: FloatArray, iou: float
+) -> BoolArray:
+    """Boxes that overlap none of ``others`` and no better-scored one of themselves.
+
+    A box ``(xy, wh)`` is isolated when its IoU with every box of ``others`` is below
+    ``iou`` and it is not a :func:`duplicates` of a higher-scored box among the boxes so
+    isolated.
+
+    Parameters
+    ----------
+    xy, wh : (M, 2)
+        Box centres and sizes.
+    score : (M,)
+        Their scores (any monotone scale).
+    others : (K, 4)
+        Boxes ``(left, top, width, height)`` (live tracks' predicted boxes, high detections).
+    iou : float
+        Threshold in (0, 1].
+
+    Returns
+    -------
+    (M,) bool
+    """
+    m = xy.shape[0]
+    tlwh = np.concatenate([xy - wh / 2, wh], axis=1)
+    keep = np.ones(m, dtype=bool)
+    if others.shape[0]:
+        keep = iou_matrix(tlwh, others).max(axis=1) < iou
+    idx = keep.nonzero()[0]
+    if idx.size > 1:  # of two overlapping candidates, the better-scored one
+        keep[idx[duplicates(xy[idx], wh[idx], score[idx], iou)]] = False
+    return keep

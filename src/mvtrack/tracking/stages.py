@@ -40,7 +40,7 @@ from mvtrack.association.regions import SHAPE_PARAMS, GateRegions, axis_shapes, 
 from mvtrack.filters.cv import KalmanCVPredictor
 from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.lifecycle import STOPPED, TENTATIVE
-from mvtrack.tracking.scores import ScoreCalibration, duplicates
+from mvtrack.tracking.scores import ScoreCalibration, duplicates, isolated
 from mvtrack.tracking.table import HITS, LAST_K, LAST_XY, STATE, WH, TrackTable
 from mvtrack.types import Detections
 
@@ -170,7 +170,41 @@ class Associator:
         if self.config.stopped_margin is not None and matched:
             matched, ud, recovered = self._standing(tab, det_index, drow, matched, ud,
                                                     recovered, sel)
+        if self.config.low_birth_iou is not None and sel is not None and sel[1].size:
+            ud = self.low_births(dets, drow, sel, ud, tab, det_index, gxy)
         return det_index, matched, ud, recovered
+
+    def low_births(
+        self, dets: Detections, drow: FloatArray,
+        sel: tuple[NDArray[np.intp], NDArray[np.intp]], ud: NDArray[np.intp],
+        tab: TrackTable | None = None, det_index: IntArray | None = None,
+        gxy: FloatArray | None = None,
+    ) -> NDArray[np.intp]:
+        """The detections that start tentative tracks: the high ones left unassigned ``ud``
+        and the low ones (``sel[1]``) not taken by a track (``det_index``) that overlap no
+        high detection, no better-scored such low detection and no predicted box (centres
+        ``gxy``) of a track of ``tab`` that lives on (established, or tentative and matched
+        now: an unmatched tentative track ends, and the object it was born on may start
+        again) by ``low_birth_iou`` or more (:func:`~mvtrack.tracking.scores.isolated`)."""
+        lo = sel[1]
+        if det_index is not None and det_index.size:
+            lo = lo[~np.isin(lo, det_index)]
+        if lo.size == 0:
+            return ud
+        hb = drow.take(sel[0], 0)
+        others = np.concatenate([hb[:, :2] - hb[:, 2:] / 2, hb[:, 2:]], axis=1)
+        if tab is not None and gxy is not None and det_index is not None and gxy.shape[0]:
+            rows = ((tab.ints[:, STATE] != TENTATIVE) | (det_index >= 0)).nonzero()[0]
+            twh = tab.floats[rows][:, WH]
+            others = np.concatenate(
+                [others, np.concatenate([gxy[rows] - twh / 2, twh], axis=1)]
+            )
+        box = drow.take(lo, 0)
+        ok = isolated(box[:, :2], box[:, 2:], dets.score.take(lo), others,
+                      self.config.low_birth_iou)
+        if not np.count_nonzero(ok):
+            return ud
+        return np.union1d(ud, lo[ok]).astype(np.intp)
 
     def _standing(
         self, tab: TrackTable, det_index: IntArray, drow: FloatArray, matched: int,
@@ -230,10 +264,12 @@ class Associator:
         drow: FloatArray, lo: NDArray[np.intp], f2: FloatArray | None,
         r_rows: FloatArray | None,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-        """Last stage: the established (non-tentative) tracks still unmatched against the low
-        detections ``lo``, with the first stage's distance and gate around the prediction
+        """Last stage: the established (non-tentative; any with ``low_tentative``) tracks still
+        unmatched against the low detections ``lo``, with the first stage's distance and gate around the prediction
         (``score_high``). ``drow`` are the detections' rows ``x, y, w, h``."""
-        cand = ((det_index < 0) & (tab.ints[:, STATE] != TENTATIVE)).nonzero()[0]
+        free = det_index < 0
+        cand = (free if self.config.low_tentative
+                else free & (tab.ints[:, STATE] != TENTATIVE)).nonzero()[0]
         if cand.size == 0:
             return _EMPTY, _EMPTY
         left = drow.take(lo, 0)

@@ -16,7 +16,8 @@ and §2.1 steps 3–5 (paper 2):
    pipeline's template matching; the ones it finds are held in state ``STOPPED``;
 5. **update** the predictors with the assigned measurements (eqs. (3)–(5) of paper 1);
 6. **life cycle** (:mod:`mvtrack.tracking.lifecycle`): confirm, coast, delete, and start new
-   tentative tracks from the unassigned detections (new-target recognition, SPEC §2.1 step 4);
+   tentative tracks from the unassigned detections (new-target recognition, SPEC §2.1 step 4;
+   with scores, the high ones and the isolated low ones, ``low_birth_iou``);
    a coasting track's rows are output only for its first ``coast_output`` seconds.
 
 Every predictor is built by :func:`mvtrack.filters.predictors.make_predictor`; the default
@@ -200,7 +201,12 @@ class Tracker:
         sel = self.associator.score_select(dets) if m else None  # (high, low), None: all high
         out = None
         if tab.ints.shape[0] == 0:
-            ud = np.arange(m) if sel is None else sel[0]
+            if sel is None:
+                ud = np.arange(m)
+            elif self.config.low_birth_iou is not None and sel[1].size:
+                ud = self.associator.low_births(dets, drow, sel, sel[0])
+            else:
+                ud = sel[0]
         else:
             ps = pred.predict(ps)  # time update, eqs. (6)–(7) of paper 1
             gxy, f2, r_rows = self.associator.centres(tab, ps, k)
