@@ -70,21 +70,28 @@ def test_duplicates_greedy_suppression_by_hand():
 
 
 def test_isolated_boxes_by_hand():
-    # candidates A, B (IoU 0.6 with each other), C; D far away; others: one box over C
+    # candidates A, B (IoU 0.6 with each other), C; D far away; one other box over C
     xy = np.array([[10.0, 10.0], [12.5, 10.0], [50.0, 50.0], [100.0, 100.0]])
     wh = np.full((4, 2), 10.0)
-    others = np.array([[47.5, 45.0, 10.0, 10.0]])  # C's box shifted by (2.5, 0): IoU 0.6
+    oxy, owh = np.array([[52.5, 50.0]]), np.array([[10.0, 10.0]])  # IoU 0.6 with C
     score = np.array([1.0, 2.0, 3.0, 4.0])
     # C overlaps a track; of A and B, the better-scored B stays; D is alone
-    assert isolated(xy, wh, score, others, 0.5).tolist() == [False, True, False, True]
+    assert isolated(xy, wh, score, oxy, owh, 0.5).tolist() == [False, True, False, True]
     # a threshold above every overlap: all of them (A and B no longer duplicates either)
-    assert isolated(xy, wh, score, others, 0.61).all()
-    # B over a second track box (centre (15, 10): IoU 0.6 with B, 0.33 with A): B goes, and
-    # A, which only B suppressed, stays
-    others2 = np.concatenate([others, [[10.0, 5.0, 10.0, 10.0]]])
-    assert isolated(xy, wh, score, others2, 0.5).tolist() == [True, False, False, True]
+    assert isolated(xy, wh, score, oxy, owh, 0.61).all()
+    # exactly at the threshold counts as overlapping (IoU >= t)
+    assert isolated(xy, wh, score, oxy, owh, 0.6).tolist() == [False, True, False, True]
+    # B under a second box (centre (15, 10): IoU 0.6 with B, 1/3 with A): B goes, and A,
+    # which only B suppressed, stays
+    oxy2, owh2 = np.array([[52.5, 50.0], [15.0, 10.0]]), np.full((2, 2), 10.0)
+    assert isolated(xy, wh, score, oxy2, owh2, 0.5).tolist() == [True, False, False, True]
+    # boxes of other sizes: a 20 x 20 box holding D (IoU 100 / 400 = 0.25)
+    oxy3, owh3 = np.array([[100.0, 100.0]]), np.array([[20.0, 20.0]])
+    assert isolated(xy[3:], wh[3:], score[3:], oxy3, owh3, 0.25).tolist() == [False]
+    assert isolated(xy[3:], wh[3:], score[3:], oxy3, owh3, 0.26).tolist() == [True]
     # nothing to compare with: every box, less the duplicates
-    assert isolated(xy, wh, score, np.zeros((0, 4)), 0.5).tolist() == [False, True, True, True]
+    none = np.zeros((0, 2))
+    assert isolated(xy, wh, score, none, none, 0.5).tolist() == [False, True, True, True]
 
 
 def test_pending_scores_give_the_same_calibration_as_one_sorted_sample():

@@ -77,7 +77,7 @@ def test_an_isolated_low_box_starts_a_track_only_a_high_box_confirms():
     strict = _run(frames, CFG.replace(low_birth_iou=None))
     assert _ids_at(strict, frames, person) == [0] * 5 + [1] * (n - 5)
     # a weak box beside a strong one on a frame with no track yet starts nothing
-    dup = np.where(np.arange(n)[:, None] < 4, person + [6.0, 4.0], np.nan)  # IoU 0.62
+    dup = np.where(np.arange(n)[:, None] < 4, person + np.array([6.0, 4.0]), np.nan)  # IoU 0.62
     both = _frames([(person, np.full(n, 0.9)), (dup, np.full(n, 0.3))], n)
     log = _run(both, CFG)
     assert set(log.track_ids.tolist()) == {1}

@@ -185,7 +185,10 @@ def output_policy(config: TrackerConfig, coasting: bool) -> str:
         parts.append(f"tracks shorter than {config.min_track_length:g} s left out")
     if config.score_high is not None:
         scale = config.score_scale if isinstance(config.score_scale, str) else "LO,HI"
-        parts.append(f"started by detections scored >= {config.score_high:g} ({scale} scale)")
+        parts.append(f"started by detections scored >= {config.score_high:g} ({scale} scale)"
+                     + ("" if config.low_birth_iou is None else
+                        f" or by weaker ones overlapping nothing (IoU < {config.low_birth_iou:g})"
+                        + ("" if config.low_tentative else " once a stronger one joins them")))
     return ", ".join(parts)
 
 

@@ -186,13 +186,14 @@ def duplicates(
 
 
 def isolated(
-    xy: FloatArray, wh: FloatArray, score: FloatArray, others: FloatArray, iou: float
+    xy: FloatArray, wh: FloatArray, score: FloatArray, oxy: FloatArray, owh: FloatArray,
+    iou: float,
 ) -> BoolArray:
-    """Boxes that overlap none of ``others`` and no better-scored one of themselves.
+    """Boxes that overlap none of some others and no better-scored one of themselves.
 
-    A box ``(xy, wh)`` is isolated when its IoU with every box of ``others`` is below
-    ``iou`` and it is not a :func:`duplicates` of a higher-scored box among the boxes so
-    isolated.
+    A box is isolated when its IoU with every other box ``(oxy, owh)`` is below ``iou`` and it
+    is not a :func:`duplicates` of a higher-scored box among the boxes so isolated. The test
+    ``IoU ≥ t`` is ``|a ∩ b| (1 + t) ≥ t (|a| + |b|)``, without a division.
 
     Parameters
     ----------
@@ -200,8 +201,8 @@ def isolated(
         Box centres and sizes.
     score : (M,)
         Their scores (any monotone scale).
-    others : (K, 4)
-        Boxes ``(left, top, width, height)`` (live tracks' predicted boxes, high detections).
+    oxy, owh : (K, 2)
+        Centres and sizes of the other boxes (live tracks' predicted boxes, high detections).
     iou : float
         Threshold in (0, 1].
 
@@ -209,11 +210,15 @@ def isolated(
     -------
     (M,) bool
     """
-    m = xy.shape[0]
-    tlwh = np.concatenate([xy - wh / 2, wh], axis=1)
-    keep = np.ones(m, dtype=bool)
-    if others.shape[0]:
-        keep = iou_matrix(tlwh, others).max(axis=1) < iou
+    keep = np.ones(xy.shape[0], dtype=bool)
+    if oxy.shape[0]:
+        half, ohalf = wh / 2, owh / 2
+        side = np.minimum((xy + half)[:, None], oxy + ohalf)  # (M, K, 2): overlap per axis
+        side -= np.maximum((xy - half)[:, None], oxy - ohalf)
+        np.maximum(side, 0.0, out=side)
+        inter = side[..., 0] * side[..., 1]
+        areas = (wh[:, 0] * wh[:, 1])[:, None] + owh[:, 0] * owh[:, 1]
+        keep = ~(inter * (1.0 + iou) >= iou * areas).any(axis=1)
     idx = keep.nonzero()[0]
     if idx.size > 1:  # of two overlapping candidates, the better-scored one
         keep[idx[duplicates(xy[idx], wh[idx], score[idx], iou)]] = False

@@ -22,7 +22,10 @@ Euclidean stages.
 4. **recovery** (``recover_speed``): an established track that lost its target may take a
    leftover detection near its last measurement (its predictor restarts there);
 5. **low-score stage** (``score_high``): established tracks still unmatched against the
-   low-score detections, with the first stage's distance and gate.
+   low-score detections, with the first stage's distance and gate;
+6. **births** (:meth:`Associator.low_births`): the high detections left over, and the low ones
+   that overlap no living track, no high detection and no better low one
+   (``low_birth_iou``), start tentative tracks.
 """
 
 from __future__ import annotations
@@ -188,23 +191,24 @@ class Associator:
         again) by ``low_birth_iou`` or more (:func:`~mvtrack.tracking.scores.isolated`)."""
         lo = sel[1]
         if det_index is not None and det_index.size:
-            lo = lo[~np.isin(lo, det_index)]
+            taken = np.zeros(drow.shape[0], dtype=bool)
+            taken[det_index] = True  # −1 marks the NaN row at the end of drow
+            lo = lo[~taken.take(lo)]
         if lo.size == 0:
             return ud
         hb = drow.take(sel[0], 0)
-        others = np.concatenate([hb[:, :2] - hb[:, 2:] / 2, hb[:, 2:]], axis=1)
+        oxy, owh = hb[:, :2], hb[:, 2:]
         if tab is not None and gxy is not None and det_index is not None and gxy.shape[0]:
             rows = ((tab.ints[:, STATE] != TENTATIVE) | (det_index >= 0)).nonzero()[0]
-            twh = tab.floats[rows][:, WH]
-            others = np.concatenate(
-                [others, np.concatenate([gxy[rows] - twh / 2, twh], axis=1)]
-            )
+            if rows.size:
+                oxy = np.concatenate([oxy, gxy.take(rows, 0)])
+                owh = np.concatenate([owh, tab.floats.take(rows, 0)[:, WH]])
         box = drow.take(lo, 0)
-        ok = isolated(box[:, :2], box[:, 2:], dets.score.take(lo), others,
+        ok = isolated(box[:, :2], box[:, 2:], dets.score.take(lo), oxy, owh,
                       self.config.low_birth_iou)
         if not np.count_nonzero(ok):
             return ud
-        return np.union1d(ud, lo[ok]).astype(np.intp)
+        return np.concatenate([ud, lo.compress(ok)])  # births are sorted by position
 
     def _standing(
         self, tab: TrackTable, det_index: IntArray, drow: FloatArray, matched: int,
@@ -265,8 +269,8 @@ class Associator:
         r_rows: FloatArray | None,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         """Last stage: the established (non-tentative; any with ``low_tentative``) tracks still
-        unmatched against the low detections ``lo``, with the first stage's distance and gate around the prediction
-        (``score_high``). ``drow`` are the detections' rows ``x, y, w, h``."""
+        unmatched against the low detections ``lo``, with the first stage's distance and gate
+        around the prediction (``score_high``). ``drow`` are the detections' rows ``x, y, w, h``."""
         free = det_index < 0
         cand = (free if self.config.low_tentative
                 else free & (tab.ints[:, STATE] != TENTATIVE)).nonzero()[0]

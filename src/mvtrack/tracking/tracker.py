@@ -310,6 +310,8 @@ class Tracker:
         those that ended more than ``relink_window`` ago (:mod:`mvtrack.tracking.relink`)."""
         tid, kg, fg = self._gone
         gone = (delete & (ints[:, TID] > 0)).nonzero()[0]
+        if gone.size == 0 and (kg.size == 0 or self._k - kg.min() <= self._relink_window):
+            return  # nothing ended now and nothing expired
         if gone.size:
             rows = np.column_stack([flo[gone][:, LAST_XY], self.predictor.velocity(ps)[gone],
                                     flo[gone][:, WH]])
