@@ -127,7 +127,7 @@ class ScoreCalibration:
             return np.ones_like(s)
         below = np.searchsorted(self._sorted, s, side="right")
         if self._n:
-            below += np.count_nonzero(pending <= s[:, None], axis=1)
+            below += np.searchsorted(np.sort(pending), s, side="right")  # #{pending <= s}
         return below / n  # c(s) = #{s_j <= s} / n
 
     def _learn(self, s: FloatArray) -> None:
