@@ -65,6 +65,10 @@ def test_duplicates_greedy_suppression_by_hand():
     # B best: it suppresses both neighbours
     dup = duplicates(xy, wh, np.array([2.0, 3.0, 1.0, 0.5]), 0.5)
     assert dup.tolist() == [True, False, True, False]
+    # equal scores: the leftmost box of a pair is kept, whatever the order of the rows
+    for perm in ([0, 1, 2, 3], [2, 1, 0, 3], [3, 2, 1, 0]):
+        dup = duplicates(xy[perm], wh[perm], np.ones(4), 0.5)
+        assert dup[np.argsort(perm)].tolist() == [False, True, False, False]
     # above the threshold nothing is a duplicate
     assert not duplicates(xy, wh, np.array([3.0, 2.0, 1.0, 0.5]), 0.61).any()
 

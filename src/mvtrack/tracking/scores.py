@@ -150,7 +150,8 @@ def duplicates(
     """Boxes that overlap a higher-scored box of the same frame by IoU ≥ ``iou``.
 
     Greedy non-maximum suppression: boxes are visited by decreasing score (ties by their
-    order); a box is a duplicate when a kept box overlaps it by ``iou`` or more.
+    position, left to right, then top to bottom, so the order of the rows does not matter); a
+    box is a duplicate when a kept box overlaps it by ``iou`` or more.
 
     Parameters
     ----------
@@ -175,7 +176,7 @@ def duplicates(
     np.fill_diagonal(over, False)
     if not over.any():
         return dup
-    order = np.argsort(-score, kind="stable")
+    order = np.lexsort((xy[:, 1], xy[:, 0], -score))
     rank = np.empty(m, dtype=np.intp)
     rank[order] = np.arange(m)
     # a loop over the boxes that overlap another one only (few), best first
