@@ -65,7 +65,7 @@ def make_detector(name: str, **params: Any) -> Any:
         )
     try:
         det = cls(**params)
-    except TypeError as exc:
+    except (TypeError, ValueError) as exc:  # a bad value: say which front end it was given to
         raise ValueError(f"detector {name!r}: {exc}") from None
     if split:
         from mvtrack.detection.tracksplit import TrackSplit
