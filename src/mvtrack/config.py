@@ -63,7 +63,13 @@ class RelinkSettings:
     window : float
         Seconds after its end during which a track can be continued.
     reach : float
-        Radius of the motion test as a share of the taller box.
+        Radius of the motion test as a share of the taller box, at the ended track's last
+        row.
+    spread : float
+        Growth of that radius per second since the ended track's last row, as a share of the
+        taller box: where a hidden walker is becomes less certain the longer it is hidden (it
+        may slow down, stop or turn back; half a body height a second is about a third of a
+        walker's speed).
     min_similarity : float
         Least Bhattacharyya coefficient of the appearances, in [0, 1].
     size_ratio : float
@@ -78,9 +84,11 @@ class RelinkSettings:
     min_similarity: float = 0.8
     size_ratio: float = 1.6
     smoothing: float = 0.1
+    spread: float = 0.5
 
     def __post_init__(self) -> None:
         ranges = {  # name: the test of a number
+            "spread": lambda v: v >= 0,
             "window": lambda v: v > 0, "reach": lambda v: v > 0,
             "min_similarity": lambda v: 0.0 <= v <= 1.0,
             "size_ratio": lambda v: v > 1.0, "smoothing": lambda v: 0.0 < v <= 1.0,

@@ -155,9 +155,9 @@ def test_knn_detects_a_moving_square_and_not_the_static_background() -> None:
             hits += bool(len(dets)) and d.min() <= 2.0
             false += int((d > 2.0 * SIDE).sum()) if len(dets) else 0
     assert hits == 40 and false == 0, (hits, false)
-    with pytest.raises(ValueError, match="^detector 'knn': .*dist2_threshold"):
+    with pytest.raises(ValueError, match=r"^detector 'knn': .*dist2_threshold"):
         make_detector("knn", dist2_threshold=0)
-    with pytest.raises(ValueError, match="^detector 'disturbance-map': hold must be"):
+    with pytest.raises(ValueError, match=r"^detector 'disturbance-map': hold must be"):
         make_detector("disturbance-map", hold=-5)
 
 

@@ -65,10 +65,11 @@ def _image(people: list[tuple[float, tuple[int, int, int]]]) -> np.ndarray:
     return img
 
 
-def _occlusion(colour, at: float, start: int = 28) -> tuple[list[int], Relinker]:
+def _occlusion(colour, at: float, start: int = 28, settings: RelinkSettings | None = None
+               ) -> tuple[list[int], Relinker]:
     """Track 1 (red) walks right at 3 px/frame, is hidden from frame 20 and deleted at 23;
     track 2 (``colour``) starts at frame ``start`` at x = ``at``. The shown IDs of track 2."""
-    rl = Relinker(10.0)
+    rl = Relinker(10.0, settings)
     shown = []
     for k in range(start + 3):
         x = 20 + 3 * k
@@ -101,6 +102,16 @@ def test_no_link_when_the_new_track_is_another_object(colour, at, why) -> None:
     shown, rl = _occlusion(colour, at=at)
     assert shown == [2, 2, 2], why
     assert rl.links == []
+
+
+def test_the_radius_grows_with_the_time_hidden() -> None:
+    # 25 px short of where the hidden one would be (it slowed down or turned): beyond
+    # reach·h = 0.5 · 30 = 15 px, within (0.5 + 0.5 · 0.9 s) · 30 = 28.5 px after 9 frames
+    at = 20 + 3 * 28 - 25
+    assert _occlusion(RED, at=at)[0] == [1, 1, 1]
+    assert _occlusion(RED, at=at, settings=RelinkSettings(spread=0.0))[0] == [2, 2, 2]
+    # the same distance four frames after its last row: (0.5 + 0.5 · 0.4 s) · 30 = 21 px < 25
+    assert _occlusion(RED, at=20 + 3 * 23 - 25, start=23)[0] == [2, 2, 2]
 
 
 def test_no_link_after_the_window() -> None:

@@ -8,8 +8,10 @@ an appearance: the colour histogram ``a`` of their measured boxes, an exponentia
 When a new public ID appears in frame ``k``, it is compared with every track that ended at
 frame ``k_e`` within the window:
 
-- **motion**: the new centre ``z`` lies within ``reach`` times the taller of the two boxes of
-  the ended track's extrapolation, :math:`\|z - (x + v (k - k_e))\| \le \rho \max(h, h')`,
+- **motion**: the new centre ``z`` lies within ``reach`` times the taller of the two boxes,
+  plus ``spread`` times it per second hidden, of the ended track's extrapolation,
+  :math:`\|z - (x + v (k - k_e))\| \le (\rho + \sigma (k - k_e) / f) \max(h, h')` at
+  ``f`` frames per second (a walker hidden longer may have slowed down or turned back),
   with ``v`` the track's mean velocity over its last one to two seconds of output rows (the
   filter's last velocity is distorted as the object disappears behind the occluder: its box
   shrinks from one side);
@@ -101,7 +103,8 @@ class Relinker:
 
     def __init__(self, fps: float, settings: RelinkSettings | None = None) -> None:
         self.settings = RelinkSettings() if settings is None else settings
-        self.window = max(1, round(self.settings.window * float(fps)))
+        self.fps = float(fps)
+        self.window = max(1, round(self.settings.window * self.fps))
         self._ids = np.zeros(1, np.int64)  # tracker ID -> shown ID (0: not seen yet)
         self._app = np.zeros((1, BINS))  # tracker ID -> appearance
         self._has_app = np.zeros(1, bool)
@@ -204,7 +207,7 @@ class Relinker:
         # it disappears behind the occluder), the new track's first box
         hn, hg = self._height[new][:, None], self._height[g][None, :]
         tall = np.maximum(hn, hg)
-        radius = s.reach * tall
+        radius = (s.reach + s.spread * gap / self.fps) * tall  # (ρ + σ Δk / f) max(h, h')
         ratio = tall / np.maximum(np.minimum(hn, hg), 1e-9)
         sim = np.sqrt(self._app[new][:, None, :] * self._app[g][None, :, :]).sum(axis=2)
         both = self._has_app[new][:, None] & self._has_app[g][None, :]
