@@ -218,6 +218,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", default=None, help="also write the figures to this JSON file")
     ap.add_argument("--scene", choices=("own", "sim"), default="own",
                     help="generate the scene here (own) or with mvtrack.sim (sim)")
+    ap.add_argument("--scores", action="store_true",
+                    help="give every detection a uniform random score in [0, 1] (the score "
+                         "stages' worst case: half the boxes low)")
+    ap.add_argument("--low-birth-iou", default=None,
+                    help="TrackerConfig.low_birth_iou (a number, or 'none')")
     ap.add_argument("--variants", action="store_true",
                     help="one run of each variant of the default (Markdown rows)")
     args = ap.parse_args(argv)
@@ -244,11 +249,15 @@ def main(argv: list[str] | None = None) -> int:
         )
         if v is not None
     }
+    if args.low_birth_iou is not None:
+        lb = args.low_birth_iou.lower()
+        changes["low_birth_iou"] = None if lb == "none" else float(lb)
     config = TrackerConfig(**changes)
     print(
         f"config: predictor={config.predictor} distance={config.distance} "
         f"assign={config.assign} gate={config.gate} confirm_hits={config.confirm_hits} "
-        f"max_coast={config.max_coast}s fps={config.fps}"
+        f"max_coast={config.max_coast}s fps={config.fps} low_birth_iou={config.low_birth_iou}"
+        + (" (uniform random scores)" if args.scores else "")
     )
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"load average {load:.1f}; one tiny NumPy op {small_op_us():.2f} µs")
@@ -262,6 +271,10 @@ def main(argv: list[str] | None = None) -> int:
             rng = np.random.default_rng(args.seed + n)
             xy, wh = crowd_scene(n, args.frames, rng)
             frames = crowd_detections(xy, wh, rng)
+        if args.scores:
+            srng = np.random.default_rng(args.seed + n + 1)
+            frames = [Detections(d.frame, d.xy, d.wh, srng.uniform(0.0, 1.0, len(d)))
+                      for d in frames]
         times, walls = [], []
         log = None
         for _ in range(args.repeats):

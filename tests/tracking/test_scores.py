@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.tracking.scores import ScoreCalibration, check_scale, duplicates, isolated
+from mvtrack.eval.iou import iou_matrix
+from mvtrack.tracking.scores import (
+    DENSE_OVERLAP,
+    ScoreCalibration,
+    check_scale,
+    duplicates,
+    isolated,
+)
 
 
 def test_auto_is_the_empirical_distribution_of_the_run_so_far():
@@ -96,6 +103,26 @@ def test_isolated_boxes_by_hand():
     # nothing to compare with: every box, less the duplicates
     none = np.zeros((0, 2))
     assert isolated(xy, wh, score, none, none, 0.5).tolist() == [False, True, True, True]
+
+
+@pytest.mark.parametrize("m", [20, 400])  # the dense test, and the spatial grid's pairs
+def test_isolated_equals_the_iou_matrix(m):
+    rng = np.random.default_rng(m)
+    k = 300
+    xy, oxy = rng.uniform(0, 2000, (m, 2)), rng.uniform(0, 2000, (k, 2))
+    wh, owh = rng.uniform(10, 120, (m, 2)), rng.uniform(10, 120, (k, 2))
+    assert (m * k > DENSE_OVERLAP) == (m == 400)
+    score = rng.permutation(m).astype(float)
+    for t in (0.05, 0.3):
+        tl = np.concatenate([xy - wh / 2, wh], axis=1)
+        otl = np.concatenate([oxy - owh / 2, owh], axis=1)
+        alone = iou_matrix(tl, otl).max(axis=1) < t
+        dup = np.zeros(m, bool)
+        idx = alone.nonzero()[0]
+        dup[idx] = duplicates(xy[idx], wh[idx], score[idx], t)
+        got = isolated(xy, wh, score, oxy, owh, t)
+        np.testing.assert_array_equal(got, alone & ~dup)
+        assert 0 < got.sum() < m  # both kinds of boxes occur
 
 
 def test_pending_scores_give_the_same_calibration_as_one_sorted_sample():

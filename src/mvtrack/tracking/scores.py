@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mvtrack.association.gating import spatial_pairs
 from mvtrack.eval.iou import iou_matrix
 
 FloatArray = NDArray[np.float64]
@@ -211,16 +212,40 @@ def isolated(
     -------
     (M,) bool
     """
-    keep = np.ones(xy.shape[0], dtype=bool)
-    if oxy.shape[0]:
-        half, ohalf = wh / 2, owh / 2
-        side = np.minimum((xy + half)[:, None], oxy + ohalf)  # (M, K, 2): overlap per axis
-        side -= np.maximum((xy - half)[:, None], oxy - ohalf)
-        np.maximum(side, 0.0, out=side)
-        inter = side[..., 0] * side[..., 1]
-        areas = (wh[:, 0] * wh[:, 1])[:, None] + owh[:, 0] * owh[:, 1]
-        keep = ~(inter * (1.0 + iou) >= iou * areas).any(axis=1)
+    keep = ~_overlaps_any(xy, wh, oxy, owh, iou) if oxy.shape[0] else np.ones(len(xy), bool)
     idx = keep.nonzero()[0]
     if idx.size > 1:  # of two overlapping candidates, the better-scored one
         keep[idx[duplicates(xy[idx], wh[idx], score[idx], iou)]] = False
     return keep
+
+
+#: pairs of boxes tested densely by :func:`isolated`; above, only those whose centres are
+#: close enough to overlap (a spatial grid)
+DENSE_OVERLAP = 6_400
+
+
+def _overlaps_any(
+    xy: FloatArray, wh: FloatArray, oxy: FloatArray, owh: FloatArray, iou: float
+) -> BoolArray:
+    """Whether each box overlaps some box ``(oxy, owh)`` by IoU ≥ ``iou``, tested as
+    ``|a ∩ b| (1 + t) ≥ t (|a| + |b|)``; every pair when there are few, else the pairs whose
+    centres lie within the sum of the two half-diagonals."""
+    m, k = xy.shape[0], oxy.shape[0]
+    if m * k <= DENSE_OVERLAP:
+        a, b = np.arange(m).repeat(k), np.tile(np.arange(k), m)
+    else:
+        half_diag = 0.5 * np.hypot(wh[:, 0], wh[:, 1])
+        reach = half_diag + 0.5 * float(np.hypot(owh[:, 0], owh[:, 1]).max())
+        a, b = spatial_pairs(xy, oxy, reach)
+        # boxes apart along x cannot overlap: one cheap test drops most candidate pairs
+        near = np.abs(xy[:, 0].take(a) - oxy[:, 0].take(b)) * 2.0 < (
+            wh[:, 0].take(a) + owh[:, 0].take(b))
+        a, b = a.compress(near), b.compress(near)
+    pxy, pwh, qxy, qwh = xy.take(a, 0), wh.take(a, 0), oxy.take(b, 0), owh.take(b, 0)
+    side = np.minimum(pxy + pwh / 2, qxy + qwh / 2) - np.maximum(pxy - pwh / 2, qxy - qwh / 2)
+    np.maximum(side, 0.0, out=side)
+    inter = side[:, 0] * side[:, 1]
+    hit = inter * (1.0 + iou) >= iou * (pwh[:, 0] * pwh[:, 1] + qwh[:, 0] * qwh[:, 1])
+    out = np.zeros(m, dtype=bool)
+    out[a.compress(hit)] = True
+    return out
