@@ -249,6 +249,25 @@ def test_preset_arguments_go_to_the_preset(tmp_path) -> None:
         build_tracker_config(RunSettings(tracker={"preset": "paper9"}), fps=15.0)
 
 
+def test_none_in_the_tracker_table_unsets_a_field(tmp_path) -> None:
+    """TOML has no null: ``"none"`` stands for ``None``; a field that cannot be None says so."""
+    from mvtrack.video import build_tracker_config
+
+    cfg = build_tracker_config(RunSettings(tracker={"second_gate": "none",
+                                                    "low_birth_iou": "None"}), fps=10.0)
+    assert cfg.second_gate is None and cfg.low_birth_iou is None
+    assert build_tracker_config(RunSettings(), fps=10.0).second_gate == 20.0
+    with pytest.raises(InputError, match="fps"):
+        build_tracker_config(RunSettings(tracker={"fps": "none"}), fps=10.0)
+    config = tmp_path / "c.toml"
+    config.write_text('[tracker]\nrecover_speed = "none"\n')
+    video = _write_avi(tmp_path / "v.avi")
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--config", str(config),
+                 "--no-video", "--max-frames", "5"]) == 0
+    assert json.loads((out / "summary.json").read_text())["tracker"]["recover_speed"] is None
+
+
 def test_changing_the_distance_resets_the_gate() -> None:
     from mvtrack.association.distances import default_gate
     from mvtrack.video import build_tracker_config

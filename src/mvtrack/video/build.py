@@ -41,6 +41,8 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     Changing the distance to another one without a gate resets the gate to the new distance's
     default (a gate is in the distance's units: px² for ``euclidean``, χ² for the others);
     naming the preset's own distance changes nothing (:func:`mvtrack.tracking.preset`).
+    TOML has no null, so the string ``"none"`` (any case) stands for ``None`` (e.g.
+    ``second_gate = "none"`` turns the second stage off).
 
     Raises
     ------
@@ -49,7 +51,8 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     """
     from mvtrack.tracking import PRESETS, TrackerConfig, preset
 
-    params = dict(settings.tracker)
+    params = {k: None if isinstance(v, str) and v.lower() == "none" else v
+              for k, v in settings.tracker.items()}
     name = params.pop("preset", "default")
     if name not in PRESETS:
         raise InputError(f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}")
