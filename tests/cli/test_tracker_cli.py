@@ -55,13 +55,34 @@ def test_cli_results_equal_the_library_run(tmp_path) -> None:
     det = tmp_path / "d.txt"
     _det_file(det)
     for flag, config in (([], preset("default", fps=30.0)),
-                         (["--no-backfill"], preset("default", fps=30.0, backfill=False))):
+                         (["--no-backfill"], preset("default", fps=30.0, backfill=False)),
+                         (["--low-birth-iou", "none"],
+                          preset("default", fps=30.0, low_birth_iou=None)),
+                         (["--low-birth-iou", "0.3"],
+                          preset("default", fps=30.0, low_birth_iou=0.3))):
         assert main(["track-detections", str(det), "--out", str(tmp_path / "o"), *flag]) == 0
         got = read_tracks(tmp_path / "o" / "d.txt")
         want = np.asarray(track_detections(read_detections(det), config).to_mot())
         np.testing.assert_array_equal(got.frame, want[:, 0].astype(int) - 1)
         np.testing.assert_array_equal(got.id, want[:, 1].astype(int))
         np.testing.assert_allclose(got.tlwh, want[:, 2:6], atol=1e-3)
+
+
+def test_low_birth_iou_reaches_the_tracker(tmp_path) -> None:
+    """A person scored low for four frames, then high: with low-score births the offline
+    track starts on the last weak box, with ``--low-birth-iou none`` on the first strong one."""
+    xy = np.array([100.0, 100.0]) + np.arange(20)[:, None] * [3.0, 1.0]
+    score = np.where(np.arange(20) < 4, 0.3, 0.9)
+    det = tmp_path / "s.txt"
+    write_detections(det, [Detections(k, xy[k : k + 1], np.array([[30.0, 60.0]]), score[k : k + 1])
+                           for k in range(20)])
+    first = {}
+    for value in ("0.1", "none"):
+        out = tmp_path / value
+        assert main(["track-detections", str(det), "--out", str(out), "--score-scale", "prob",
+                     "--low-birth-iou", value]) == 0
+        first[value] = int(read_tracks(out / "s.txt").frame.min())
+    assert first == {"0.1": 3, "none": 4}
 
 
 @pytest.mark.parametrize(
@@ -97,6 +118,11 @@ def test_bad_file_and_bad_values_are_one_line_errors(tmp_path, capsys) -> None:
     _det_file(det)
     assert main(["track-detections", str(det), "--out", str(tmp_path / "o"), "--fps", "0"]) == 2
     assert "fps" in capsys.readouterr().err
+    for value, says in (("abc", "a number or 'none'"), ("5", "low_birth_iou")):
+        assert main(["track-detections", str(det), "--out", str(tmp_path / "o"),
+                     "--low-birth-iou", value]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error:") and says in err and "\n" not in err
 
 
 def test_results_name() -> None:

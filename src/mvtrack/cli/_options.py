@@ -65,6 +65,17 @@ def parse_gate(text: str | None) -> float | None:
     return value
 
 
+def parse_optional_number(option: str, text: str) -> float | None:
+    """``"0.1"`` → 0.1, ``"none"`` → None (the setting off); anything else is an error."""
+    raw = text.strip().lower()
+    if raw == "none":
+        return None
+    try:
+        return float(raw)
+    except ValueError:
+        raise ValueError(f"{option} must be a number or 'none', got {text!r}") from None
+
+
 def video_settings(
     *,
     config: Path | None,

@@ -9,7 +9,14 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from mvtrack.cli._options import Assign, Distance, Gate, Predictor, parse_gate
+from mvtrack.cli._options import (
+    Assign,
+    Distance,
+    Gate,
+    Predictor,
+    parse_gate,
+    parse_optional_number,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Iterator
@@ -83,6 +90,15 @@ def register(app: typer.Typer) -> None:
                 show_default=False,
             ),
         ] = None,
+        low_birth_iou: Annotated[
+            str | None,
+            typer.Option(
+                help="A lower-scored detection that overlaps no track and no stronger box by "
+                "this IoU starts a track that a stronger one must confirm; 'none': only "
+                "detections from --score-high start tracks (default: the preset's, 0.1).",
+                show_default=False,
+            ),
+        ] = None,
     ) -> None:
         """Track the detections of DETFILE and write MOTChallenge results into --out.
 
@@ -119,6 +135,8 @@ def register(app: typer.Typer) -> None:
             changes["score_high"] = score_high
         if min_score is not None:
             changes["min_score"] = min_score
+        if low_birth_iou is not None:
+            changes["low_birth_iou"] = parse_optional_number("--low-birth-iou", low_birth_iou)
         config = make_preset(preset, fps=fps, **changes)
         frames = read_detections(detfile)
         t0 = time.perf_counter()
