@@ -406,6 +406,34 @@ def test_tracker_runs_with_the_structured_predictor() -> None:
         assert np.all(d.min(axis=1) < 3.0) and len(set(d.argmin(axis=1).tolist())) == 1
 
 
+def test_relation_derivatives_are_damped_by_the_occlusion_of_their_ends() -> None:
+    graph = PartGraph.chain(3)  # relations (1, 2) and (2, 3)
+    z0 = np.array([[[0.0, 0.0], [0.0, 20.0], [0.0, 50.0]]])
+    z = np.array([[[2.0, 0.0], [2.0, 20.0], [4.0, 50.0]]])
+    p = SKFParams()
+    s = predict(p, init(p, graph, z0))
+    alpha = np.array([[0.0, 0.2, 0.7]])
+    plain = update(SKFParams(damping_by="unmatched"), graph, s, z, alpha)[0]
+    damped = update(p, graph, s, z, alpha)[0]
+    np.testing.assert_allclose(damped.xr[..., :2], plain.xr[..., :2])  # offsets as (14) gives
+    d = p.relation_damping
+    np.testing.assert_allclose(damped.xr[0, 0, 2:], plain.xr[0, 0, 2:] * d**0.2)
+    np.testing.assert_allclose(damped.xr[0, 1, 2:], plain.xr[0, 1, 2:] * d**0.7)
+    # α = 0 everywhere: no damping (the SKF stays a set of independent KFs, X10)
+    none = update(p, graph, s, z, np.zeros((1, 3)))[0]
+    ref = update(SKFParams(damping_by="unmatched"), graph, s, z, np.zeros((1, 3)))[0]
+    np.testing.assert_allclose(none.xr, ref.xr)
+    # an unmatched end: the relation coasts and is damped by d, whichever reading
+    z_gone = z.copy()
+    z_gone[0, 2] = np.nan
+    a = update(p, graph, s, z_gone, alpha)[0]
+    b = update(SKFParams(damping_by="unmatched"), graph, s, z_gone, alpha)[0]
+    np.testing.assert_allclose(a.xr[0, 1], b.xr[0, 1])
+    np.testing.assert_allclose(a.xr[0, 1, 2:], s.xr[0, 1, 2:] * d)
+    with pytest.raises(ValueError, match="damping_by"):
+        SKFParams(damping_by="always")  # type: ignore[arg-type]
+
+
 def test_update_order_matters_only_under_occlusion() -> None:
     from mvtrack.filters.structured import relation_measurement
 
@@ -430,6 +458,7 @@ def test_update_order_matters_only_under_occlusion() -> None:
     assert not np.allclose(ta.relation_z[0, 1], tb.relation_z[0, 1])
     K = kalman.gain(s.Pr, first.H, first.R_rel)
     expect = s.xr[0, 1] + K[0, 1] @ (tb.relation_z[0, 1] - s.xr[0, 1, :2])
+    expect[2:] *= cells.relation_damping ** 0.7  # its derivatives damped by d ** α (α³ = 0.7)
     np.testing.assert_allclose(b.xr[0, 1], expect)  # eq. (14) with that measurement
     with pytest.raises(ValueError, match="order"):
         SKFParams(order="sideways")  # type: ignore[arg-type]

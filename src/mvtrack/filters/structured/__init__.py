@@ -35,7 +35,9 @@ Where we go beyond paper 3 (each documented on the implementing line):
 
 - a relation with an unmatched end gets no update (with α^j = 1, (15) would measure the offset
   by the part's own prediction) and its derivatives decay by ``relation_damping`` per frame,
-  so a part hidden for many frames keeps a bounded offset;
+  so a part hidden for many frames keeps a bounded offset; a relation whose ends are matched
+  decays by ``relation_damping ** α`` (``damping_by="alpha"``), α of its more occluded end,
+  since (15) measures it by that end's prediction in proportion to α;
 - a filter that receives no information at all keeps its prior covariance (E3.9 otherwise);
 - options ``q_rel`` (relation process noise, default Q_r = 0.01·Q_c, E3.12: the parts of one
   body keep their relative positions far more steadily than the body moves; with Q_r = Q_c the

@@ -39,9 +39,17 @@ class SKFParams:
     normalise : {"count", "weights"}
         Normalisation of the neighbour sum of (13): 1/N_j, or 1/Σ(1 − α^i) (E3.2).
     relation_damping : float
-        Factor in [0, 1] applied each frame to the velocity and acceleration of a relation with
-        an unmatched end (which coasts, having no measurement). Not in paper 3: with 1.0 a CA
-        relation coasting for many frames drifts quadratically; 0.8 bounds the drift.
+        Factor ``d`` in [0, 1] applied each frame to the velocity and acceleration of a
+        relation with an unmatched end (which coasts, having no measurement). Not in paper 3:
+        with 1.0 a CA relation coasting for many frames drifts quadratically; 0.8 bounds the
+        drift.
+    damping_by : {"alpha", "unmatched"}
+        ``"alpha"``: a relation whose ends are both matched is damped by ``d ** α``, ``α`` the
+        larger of its ends' occlusion measures (16). Eq. (15) measures such a relation by the
+        occluded end's own prediction in proportion to ``α``, the loop the damping exists to
+        break; an unmatched end is the limit ``α = 1`` (SPEC §3.3 "No match"), so the two
+        cases meet. ``"unmatched"``: only relations with an unmatched end are damped (the
+        first reading).
     relation_noise : {"constant", "occlusion"}
         ``"constant"``: R_r for every relation update (SPEC §3.3, E3.9). ``"occlusion"`` (not
         in paper 3): R_r / ((1 − α^i)(1 − α^j)), so an occluded part's own prediction, which
@@ -64,6 +72,7 @@ class SKFParams:
     inferred: Literal["prior", "measurement"] = "prior"
     normalise: Literal["count", "weights"] = "count"
     relation_damping: float = 0.8
+    damping_by: Literal["alpha", "unmatched"] = "alpha"
     relation_noise: Literal["constant", "occlusion"] = "constant"
     order: Literal["relations-first", "cells-first"] = "relations-first"
 
@@ -86,6 +95,10 @@ class SKFParams:
         if self.order not in ("relations-first", "cells-first"):
             raise ValueError(
                 f"order must be 'relations-first' or 'cells-first', got {self.order!r}"
+            )
+        if self.damping_by not in ("alpha", "unmatched"):
+            raise ValueError(
+                f"damping_by must be 'alpha' or 'unmatched', got {self.damping_by!r}"
             )
         if not 0.0 <= self.relation_damping <= 1.0:
             raise ValueError(f"relation_damping must be in [0, 1], got {self.relation_damping}")

@@ -196,8 +196,15 @@ def update(
     # eq. (14) of paper 3: the standard update; relations without a measurement coast
     xr, Pr = kalman.update(state.xr, state.Pr, mr, H, R_rel, mask=rel_ok)
     # our addition (not in paper 3): a coasting relation's derivatives decay geometrically, so
-    # a part hidden for many frames keeps a bounded offset from its neighbours.
-    xr[..., 2:] *= np.where(rel_ok, 1.0, params.relation_damping)[..., None]
+    # a part hidden for many frames keeps a bounded offset from its neighbours; with both ends
+    # matched, by d ** α (α of the more occluded end): (15) then measures the relation by that
+    # end's own prediction in proportion to α, the same loop, and α = 1 meets the unmatched case
+    if params.damping_by == "alpha":
+        a_rel = np.maximum(alpha[:, graph.edges[:, 0]], alpha[:, graph.edges[:, 1]])
+        damp = np.where(rel_ok, params.relation_damping ** a_rel, params.relation_damping)
+    else:
+        damp = np.where(rel_ok, 1.0, params.relation_damping)
+    xr[..., 2:] *= damp[..., None]
 
     terms = SKFTerms(term2, term3, mr, head, tail)
     return SKFState(xc, Pc, xr, Pr), terms
