@@ -96,7 +96,9 @@ def default(fps: float = 30.0) -> TrackerConfig:
     detection whose box widths or heights differ by more than a factor 2 are never paired
     (``size_gate``; off in the video pipeline). Detection scores are ranked among the
     run's (``score_scale="auto"``): the lowest 20 % are dropped (``min_score``), those below
-    the median only extend established tracks (``score_high``); chosen by leave-one-sequence-out
+    the median only extend established tracks (``score_high``) or, overlapping no track and no
+    stronger box, start one that a stronger box must confirm (``low_birth_iou``); chosen by
+    leave-one-sequence-out
     on the MOT15 public detections (docs/bench/mot15-defaults.md). Detections without a score
     (blobs, simulations) are all high. Offline runs
     (:func:`~mvtrack.tracking.track_detections`) write a confirmed track from its first
