@@ -271,6 +271,34 @@ def _distinct(pred: FloatArray, same: float = 0.5) -> FloatArray:
     return pred[~((share >= same) & smaller).any(axis=1)]
 
 
+def usable_predictions(
+    predicted_boxes: FloatArray | None, size_prior: SizePrior | None = None, wide: float = 1.8
+) -> FloatArray:
+    """The predicted boxes the split uses: finite, of positive size, not a track that follows
+    a blob of two (``max(wide, 1.8)`` times as wide as the prior's object, when it is ready)
+    and without duplicates (:func:`_distinct`)."""
+    pred = (
+        np.zeros((0, 4))
+        if predicted_boxes is None
+        else np.asarray(predicted_boxes, np.float64).reshape(-1, 4)
+    )
+    pred = pred[(pred[:, 2] > 0) & (pred[:, 3] > 0) & np.isfinite(pred).all(axis=1)]
+    if size_prior is not None and size_prior.ready and len(pred):
+        # a track that follows a blob of two people predicts a box of two: not one object
+        pred = pred[size_prior.ratio(pred)[:, 0] < max(wide, 1.8)]
+    return _distinct(pred)
+
+
+def blob_claims(
+    boxes: FloatArray, pred: FloatArray, cover: float
+) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
+    """For each predicted box, the blob holding most of it (``home``) and whether that blob
+    holds ``cover`` of its area (the track claims part of the blob, step 2)."""
+    share = _overlap(boxes, pred) / np.maximum(pred[:, 2:].prod(axis=1), 1e-9)[None, :]
+    home = share.argmax(axis=0)
+    return home, share[home, np.arange(len(pred))] >= cover
+
+
 def split_merge(
     blobs: FloatArray,
     mask: NDArray[np.uint8],
@@ -322,16 +350,7 @@ def split_merge(
         :data:`PLAIN`, :data:`MERGED` or :data:`SPLIT` per box.
     """
     boxes = np.asarray(blobs, np.float64).reshape(-1, 4)
-    pred = (
-        np.zeros((0, 4))
-        if predicted_boxes is None
-        else np.asarray(predicted_boxes, np.float64).reshape(-1, 4)
-    )
-    pred = pred[(pred[:, 2] > 0) & (pred[:, 3] > 0) & np.isfinite(pred).all(axis=1)]
-    if size_prior is not None and size_prior.ready and len(pred):
-        # a track that follows a blob of two people predicts a box of two: not one object
-        pred = pred[size_prior.ratio(pred)[:, 0] < max(wide, 1.8)]
-    pred = _distinct(pred)
+    pred = usable_predictions(predicted_boxes, size_prior, wide)
     if merge:
         boxes, flags = merge_fragments(boxes, pred, inside)
     else:
@@ -342,9 +361,7 @@ def split_merge(
         return boxes, flags
     k_of = np.zeros(len(boxes), np.int64)
     if len(pred):
-        share = _overlap(boxes, pred) / np.maximum(pred[:, 2:].prod(axis=1), 1e-9)[None, :]
-        home = share.argmax(axis=0)  # the blob holding most of each predicted box
-        claims = share[home, np.arange(len(pred))] >= cover
+        home, claims = blob_claims(boxes, pred, cover)
         k_of = np.bincount(home[claims], minlength=len(boxes))
     wide_k = np.zeros(len(boxes), np.int64)
     if size_prior is not None and size_prior.ready:

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.detection.feedback import predicted_boxes
-from mvtrack.detection.splitmerge import PLAIN, _overlap, split_merge
+from mvtrack.detection.splitmerge import PLAIN, blob_claims, split_merge, usable_predictions
 from mvtrack.types import Detections, TrackFrame
 
 Image = NDArray[np.uint8]
@@ -75,12 +75,15 @@ class TrackSplit:
         return Detections.from_tlwh(dets.frame, boxes)
 
     def _shared(self, blobs: Any) -> bool:
-        """Whether a blob holds ``cover`` of two or more predicted boxes (without merging,
-        :func:`~mvtrack.detection.splitmerge.split_merge` changes nothing otherwise)."""
-        pred = self.predicted
-        area = np.maximum(pred[:, 2] * pred[:, 3], 1e-9)
-        held = _overlap(np.asarray(blobs, np.float64), pred) >= self.cover * area[None, :]
-        return bool((np.count_nonzero(held, axis=1) >= 2).any())
+        """Whether a blob is claimed by two or more predicted boxes (without merging,
+        :func:`~mvtrack.detection.splitmerge.split_merge` changes nothing otherwise): its own
+        test, on the boxes it would use."""
+        pred = usable_predictions(self.predicted)
+        if len(pred) < 2:
+            return False
+        boxes = np.asarray(blobs, np.float64).reshape(-1, 4)
+        home, claims = blob_claims(boxes, pred, self.cover)
+        return bool((np.bincount(home[claims], minlength=len(boxes)) >= 2).any())
 
     def observe(self, dets: Detections, tracks: TrackFrame) -> None:
         """Keep the confirmed tracks' boxes predicted for the next frame (and hand the
