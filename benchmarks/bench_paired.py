@@ -1,0 +1,67 @@
+"""Two tracker configurations timed in paired, alternating runs on the MOT15 sequences.
+
+Each round runs ``Tracker.step`` over every frame of a sequence once with configuration A and
+once with B (the default preset with the JSON overrides given), in alternation, so that the
+load of this noisy machine falls on both alike; the figure of each is its fastest round, and
+the ratio B / A is what to read. The detections are read before the clock starts.
+
+Usage::
+
+    python benchmarks/bench_paired.py '{"low_birth_iou": null}' '{}' --rounds 9
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve().parent
+DATA = HERE.parent.parent / "shared" / "data" / "real"
+SEQUENCES = {"TUD-Campus": 25.0, "TUD-Stadtmitte": 25.0, "ADL-Rundle-6": 30.0, "KITTI-17": 10.0}
+
+
+def paired(frames: list[Any], configs: list[Any], rounds: int) -> list[float]:
+    """Fastest ms per frame of each configuration over ``rounds`` alternating rounds."""
+    from mvtrack.tracking import Tracker
+
+    best = [float("inf")] * len(configs)
+    for _ in range(rounds):
+        for i, config in enumerate(configs):
+            tracker, total = Tracker(config), 0.0
+            for dets in frames:
+                t0 = time.perf_counter()
+                tracker.step(dets)
+                total += time.perf_counter() - t0
+            best[i] = min(best[i], 1000.0 * total / len(frames))
+    return best
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("a", help="JSON overrides of the default preset for configuration A")
+    ap.add_argument("b", help="JSON overrides for configuration B")
+    ap.add_argument("--rounds", type=int, default=9)
+    args = ap.parse_args(argv)
+    if not DATA.is_dir():
+        print(f"error: {DATA} not found (the MOT15 development sequences)", file=sys.stderr)
+        return 2
+    from mvtrack.io.mot import read_detections
+    from mvtrack.tracking import preset
+
+    over = [json.loads(args.a), json.loads(args.b)]
+    print(f"A = default + {args.a}; B = default + {args.b}; fastest of {args.rounds} rounds")
+    print("| sequence | A ms/frame | B ms/frame | B / A |")
+    print("|---|---:|---:|---:|")
+    for seq, fps in SEQUENCES.items():
+        frames = list(read_detections(DATA / seq / "det.txt"))
+        a, b = paired(frames, [preset("default", fps=fps, **o) for o in over], args.rounds)
+        print(f"| {seq} | {a:.3f} | {b:.3f} | {b / a:.2f} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
