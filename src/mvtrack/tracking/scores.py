@@ -231,16 +231,22 @@ def _overlaps_any(
     ``|a ∩ b| (1 + t) ≥ t (|a| + |b|)``; every pair when there are few, else the pairs whose
     centres lie within the sum of the two half-diagonals."""
     m, k = xy.shape[0], oxy.shape[0]
-    if m * k <= DENSE_OVERLAP:
-        a, b = np.arange(m).repeat(k), np.tile(np.arange(k), m)
-    else:
-        half_diag = 0.5 * np.hypot(wh[:, 0], wh[:, 1])
-        reach = half_diag + 0.5 * float(np.hypot(owh[:, 0], owh[:, 1]).max())
-        a, b = spatial_pairs(xy, oxy, reach)
-        # boxes apart along x cannot overlap: one cheap test drops most candidate pairs
-        near = np.abs(xy[:, 0].take(a) - oxy[:, 0].take(b)) * 2.0 < (
-            wh[:, 0].take(a) + owh[:, 0].take(b))
-        a, b = a.compress(near), b.compress(near)
+    if m * k <= DENSE_OVERLAP:  # every pair, as an (M, K) matrix
+        half, ohalf = wh / 2, owh / 2
+        side = np.minimum((xy + half)[:, None], oxy + ohalf)
+        side -= np.maximum((xy - half)[:, None], oxy - ohalf)
+        np.maximum(side, 0.0, out=side)
+        inter = side[..., 0] * side[..., 1]
+        areas = (wh[:, 0] * wh[:, 1])[:, None] + owh[:, 0] * owh[:, 1]
+        return (inter * (1.0 + iou) >= iou * areas).any(axis=1)
+    # many: the pairs whose centres are close enough to overlap (a spatial grid)
+    half_diag = 0.5 * np.hypot(wh[:, 0], wh[:, 1])
+    reach = half_diag + 0.5 * float(np.hypot(owh[:, 0], owh[:, 1]).max())
+    a, b = spatial_pairs(xy, oxy, reach)
+    # boxes apart along x cannot overlap: one cheap test drops most candidate pairs
+    near = np.abs(xy[:, 0].take(a) - oxy[:, 0].take(b)) * 2.0 < (
+        wh[:, 0].take(a) + owh[:, 0].take(b))
+    a, b = a.compress(near), b.compress(near)
     pxy, pwh, qxy, qwh = xy.take(a, 0), wh.take(a, 0), oxy.take(b, 0), owh.take(b, 0)
     side = np.minimum(pxy + pwh / 2, qxy + qwh / 2) - np.maximum(pxy - pwh / 2, qxy - qwh / 2)
     np.maximum(side, 0.0, out=side)
