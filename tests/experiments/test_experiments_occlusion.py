@@ -126,7 +126,7 @@ def test_occlusion_experiment_report(tmp_path, monkeypatch) -> None:
     assert v["cells before relations"]["skf_max_err"] < fig["skf_max_err"]
     ax = report.plots["designs"].axes[0]
     hbars = [p for c in ax.containers if hasattr(c, "patches") for p in c.patches]
-    runs = {"SPEC default": fig, **v}
+    runs = {"default (SPEC §3.3, our damping)": fig, **v}
     at = dict(zip([t.get_text() for t in ax.get_yticklabels()], ax.get_yticks(), strict=True))
     assert sorted(at, key=at.get, reverse=True) == list(runs)  # the default on top
     for p, key in zip(hbars, runs, strict=True):

@@ -24,7 +24,7 @@ def designs_plot(fig: dict[str, Any]) -> Any:
 
     from mvtrack.viz.colors import FAILURE_COLOR, PALETTE
 
-    runs = {"SPEC default": fig, **fig["variants"]}
+    runs = {"default (SPEC §3.3, our damping)": fig, **fig["variants"]}
     names = list(runs)
     y = np.arange(len(names))[::-1]
     mx = [runs[n]["skf_max_err"] for n in names]
