@@ -36,7 +36,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from mvtrack.association.gating import spatial_pairs
-from mvtrack.eval.iou import iou_matrix
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -172,8 +171,7 @@ def duplicates(
     dup = np.zeros(m, dtype=bool)
     if m < 2:
         return dup
-    tlwh = np.concatenate([xy - wh / 2, wh], axis=1)
-    over = iou_matrix(tlwh, tlwh) >= iou
+    over = _overlap_at_least(xy[:, None], wh[:, None], xy, wh, iou)
     np.fill_diagonal(over, False)
     if not over.any():
         return dup
@@ -224,22 +222,29 @@ def isolated(
 DENSE_OVERLAP = 6_400
 
 
+def _overlap_at_least(
+    axy: FloatArray, awh: FloatArray, bxy: FloatArray, bwh: FloatArray, iou: float
+) -> BoolArray:
+    """``IoU(a, b) ≥ iou`` for boxes given by centres and sizes (broadcast against each other:
+    a matrix, or aligned pairs), as ``|a ∩ b| (1 + t) ≥ t (|a| + |b|)`` with ``|a ∩ b| > 0``."""
+    ahalf, bhalf = awh / 2, bwh / 2
+    side = np.minimum(axy + ahalf, bxy + bhalf)
+    side -= np.maximum(axy - ahalf, bxy - bhalf)
+    np.maximum(side, 0.0, out=side)
+    inter = side[..., 0] * side[..., 1]
+    areas = awh[..., 0] * awh[..., 1] + bwh[..., 0] * bwh[..., 1]
+    return (inter * (1.0 + iou) >= iou * areas) & (inter > 0)
+
+
 def _overlaps_any(
     xy: FloatArray, wh: FloatArray, oxy: FloatArray, owh: FloatArray, iou: float
 ) -> BoolArray:
-    """Whether each box overlaps some box ``(oxy, owh)`` by IoU ≥ ``iou``, tested as
-    ``|a ∩ b| (1 + t) ≥ t (|a| + |b|)``; every pair when there are few, else the pairs whose
-    centres lie within the sum of the two half-diagonals."""
+    """Whether each box overlaps some box ``(oxy, owh)`` by IoU ≥ ``iou``
+    (:func:`_overlap_at_least`): every pair when there are few, else the pairs whose centres
+    lie within the sum of the two half-diagonals (a spatial grid)."""
     m, k = xy.shape[0], oxy.shape[0]
     if m * k <= DENSE_OVERLAP:  # every pair, as an (M, K) matrix
-        half, ohalf = wh / 2, owh / 2
-        side = np.minimum((xy + half)[:, None], oxy + ohalf)
-        side -= np.maximum((xy - half)[:, None], oxy - ohalf)
-        np.maximum(side, 0.0, out=side)
-        inter = side[..., 0] * side[..., 1]
-        areas = (wh[:, 0] * wh[:, 1])[:, None] + owh[:, 0] * owh[:, 1]
-        return (inter * (1.0 + iou) >= iou * areas).any(axis=1)
-    # many: the pairs whose centres are close enough to overlap (a spatial grid)
+        return _overlap_at_least(xy[:, None], wh[:, None], oxy, owh, iou).any(axis=1)
     half_diag = 0.5 * np.hypot(wh[:, 0], wh[:, 1])
     reach = half_diag + 0.5 * float(np.hypot(owh[:, 0], owh[:, 1]).max())
     a, b = spatial_pairs(xy, oxy, reach)
@@ -247,11 +252,7 @@ def _overlaps_any(
     near = np.abs(xy[:, 0].take(a) - oxy[:, 0].take(b)) * 2.0 < (
         wh[:, 0].take(a) + owh[:, 0].take(b))
     a, b = a.compress(near), b.compress(near)
-    pxy, pwh, qxy, qwh = xy.take(a, 0), wh.take(a, 0), oxy.take(b, 0), owh.take(b, 0)
-    side = np.minimum(pxy + pwh / 2, qxy + qwh / 2) - np.maximum(pxy - pwh / 2, qxy - qwh / 2)
-    np.maximum(side, 0.0, out=side)
-    inter = side[:, 0] * side[:, 1]
-    hit = inter * (1.0 + iou) >= iou * (pwh[:, 0] * pwh[:, 1] + qwh[:, 0] * qwh[:, 1])
+    hit = _overlap_at_least(xy.take(a, 0), wh.take(a, 0), oxy.take(b, 0), owh.take(b, 0), iou)
     out = np.zeros(m, dtype=bool)
     out[a.compress(hit)] = True
     return out
