@@ -2,8 +2,9 @@
 
 Each round runs ``Tracker.step`` over every frame of a sequence once with configuration A and
 once with B (the default preset with the JSON overrides given), in alternation, so that the
-load of this noisy machine falls on both alike; the figure of each is its fastest round, and
-the ratio B / A is what to read. The detections are read before the clock starts.
+load of this noisy machine falls on both alike; the figures of each are the median and the
+fastest of its rounds, and the ratios B / A are what to read. The detections are read before
+the clock starts.
 
 Usage::
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -24,11 +26,11 @@ DATA = HERE.parent.parent / "shared" / "data" / "real"
 SEQUENCES = {"TUD-Campus": 25.0, "TUD-Stadtmitte": 25.0, "ADL-Rundle-6": 30.0, "KITTI-17": 10.0}
 
 
-def paired(frames: list[Any], configs: list[Any], rounds: int) -> list[float]:
-    """Fastest ms per frame of each configuration over ``rounds`` alternating rounds."""
+def paired(frames: list[Any], configs: list[Any], rounds: int) -> list[list[float]]:
+    """Ms per frame of each configuration in each of ``rounds`` alternating rounds."""
     from mvtrack.tracking import Tracker
 
-    best = [float("inf")] * len(configs)
+    runs: list[list[float]] = [[] for _ in configs]
     for _ in range(rounds):
         for i, config in enumerate(configs):
             tracker, total = Tracker(config), 0.0
@@ -36,8 +38,8 @@ def paired(frames: list[Any], configs: list[Any], rounds: int) -> list[float]:
                 t0 = time.perf_counter()
                 tracker.step(dets)
                 total += time.perf_counter() - t0
-            best[i] = min(best[i], 1000.0 * total / len(frames))
-    return best
+            runs[i].append(1000.0 * total / len(frames))
+    return runs
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -53,13 +55,16 @@ def main(argv: list[str] | None = None) -> int:
     from mvtrack.tracking import preset
 
     over = [json.loads(args.a), json.loads(args.b)]
-    print(f"A = default + {args.a}; B = default + {args.b}; fastest of {args.rounds} rounds")
-    print("| sequence | A ms/frame | B ms/frame | B / A |")
+    print(f"A = default + {args.a}; B = default + {args.b}; {args.rounds} alternating rounds")
+    print("| sequence | A ms/frame, median (fastest) | B ms/frame, median (fastest) | "
+          "B / A, medians (fastest) |")
     print("|---|---:|---:|---:|")
     for seq, fps in SEQUENCES.items():
         frames = list(read_detections(DATA / seq / "det.txt"))
         a, b = paired(frames, [preset("default", fps=fps, **o) for o in over], args.rounds)
-        print(f"| {seq} | {a:.3f} | {b:.3f} | {b / a:.2f} |", flush=True)
+        ma, mb = statistics.median(a), statistics.median(b)
+        print(f"| {seq} | {ma:.3f} ({min(a):.3f}) | {mb:.3f} ({min(b):.3f}) | "
+              f"{mb / ma:.2f} ({min(b) / min(a):.2f}) |", flush=True)
     return 0
 
 
