@@ -159,6 +159,8 @@ SENSITIVITY: tuple[tuple[str, dict[str, Any], bool], ...] = (
     ("no interpolation (interpolate = False)", {"interpolate": False}, True),
     ("no backfill (rows from confirmation on, backfill = False)", {"backfill": False}, True),
     ("no size gate (size_gate = None)", {"size_gate": None}, True),
+    ("size gate 1.4 (size_gate = 1.4)", {"size_gate": 1.4}, True),
+    ("size gate 2 (size_gate = 2, the previous default)", {"size_gate": 2.0}, True),
     ("size gate 2.5 (size_gate = 2.5)", {"size_gate": 2.5}, True),
     ("no recovery stage (recover_speed = None)", {"recover_speed": None}, True),
     ("no recovery margin (recover_margin = 0)", {"recover_margin": 0.0}, True),
@@ -450,9 +452,13 @@ def _chosen_text() -> list[str]:
         "online tracker (crowd benchmark, video pipeline, `mvtrack demo`) cannot rewrite past "
         "frames and is unchanged by it.",
         "",
-        "Two later defaults. `size_gate` = 2: a track and a detection whose widths or heights "
-        "differ by more than a factor 2 are never paired — a box twice or half the size is "
-        "another object (see *Identities* below). It is off in the video pipeline: the "
+        "Two later defaults. `size_gate`: a track and a detection whose widths or heights "
+        "differ by more than a factor ρ are never paired — a box much larger or smaller is "
+        "another object (see *Identities* below). It was introduced here with ρ = 2; ρ = 1.5 "
+        "is the MOT15 leave-one-sequence-out choice among the gates that keep this benchmark's "
+        "figures (1.4 costs Campus noisy gt 0.014 MOTA; "
+        "`docs/bench/mot15-defaults.md`), and *size gate 2* in the sensitivity table is the "
+        "earlier value. It is off in the video pipeline: the "
         "disturbance map's blobs merge and split, and on `mvtrack demo` the gate cost IDF1 "
         "0.876 → 0.860; on the crowd scene (boxes ±10 %) it changes no output. And "
         "`interpolate`: an offline run writes every row of a gap that a track bridged (lost "
@@ -477,7 +483,8 @@ def _chosen_text() -> list[str]:
         " it changed nothing at N = 10 and 100 and cut the ID switches at N = 1 000 from 262 to "
         "223); `coast_output` two frames (three frames cost Campus noisy gt 0.016 MOTA in the"
         " sweep); and the size gate's factor 2 rather than 2.5 or 3 (the Campus event it "
-        "prevents pairs boxes 2.5 times apart; *size gate 2.5* in the sensitivity table). The "
+        "prevents pairs boxes 2.5 times apart; *size gate 2.5* in the sensitivity table), since"
+        " lowered to 1.5 on the MOT15 sequences. The "
         "crowd benchmark (docs/bench/tracker.md) and the video experiments (`mvtrack"
         " demo`, X4, X5) were re-checked with the same default. How the peers were configured is "
         "not recorded here; part of our margin on the noisy-gt columns is tuning on these "
@@ -554,7 +561,8 @@ def _gap_text(
         "recovery stage reach it, and the size term of the cost only ranks pairs; e.g. Campus "
         "frames 49–52, a 126 × 285 px track takes the 50 × 115 px box of a farther person and "
         "writes 4 false positives before it is lost. The peer's gate (σ 10 px, not stretched) "
-        "does not reach it; the default size gate (factor 2) refuses it. What remains on "
+        "does not reach it; the size gate (factor 2, and the default 1.5) refuses it. What "
+        "remains on "
         "Campus is one group of people walking side by side (frames 33–39): a track whose own "
         "detection is missed takes the neighbour's, through the second gate or the recovery "
         "stage (10 px + the 6 px margin stretched with the box). Each change that prevents "

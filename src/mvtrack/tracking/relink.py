@@ -15,7 +15,7 @@ and one assignment minimising :math:`\|z - \hat x\|` over the pairs that pass pa
 tracks with the ended ones; a paired new track gets the ended track's public ID instead of a
 new one (its rows carry no ID before its confirmation, so nothing is rewritten). The radius
 follows the boxes' shorter side: two people side by side are about one body width apart.
-``W`` is ``TrackerConfig.relink_window`` (2 s), ``ρ`` ``relink_reach`` (1).
+``W`` is ``TrackerConfig.relink_window`` (3 s), ``ρ`` ``relink_reach`` (1).
 """
 
 from __future__ import annotations
