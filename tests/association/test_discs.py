@@ -1,7 +1,7 @@
 """The disc-gate association (:mod:`mvtrack.association.discs`) equals the general code of
 :mod:`mvtrack.association` (gating values and the penalised optimal assignment), brute force
-on tiny problems, and hand computations for what only it has (per-axis factors, size term and
-size gate, the two dense stages)."""
+on tiny problems, and hand computations for what only it has (per-axis factors, size term,
+size gate and the partial views it lets through, the two dense stages)."""
 
 from __future__ import annotations
 
@@ -222,3 +222,81 @@ def test_dense_two_stage_without_second_stage_pairs_equals_two_sparse_stages(
         assert set(zip(mt.tolist(), md.tolist(), strict=True)) == want
         np.testing.assert_array_equal(ud, np.setdiff1d(np.arange(m), md))
     assert kinds == ({True, False} if gate < gate2 else {False})
+
+
+def test_partial_views_by_hand() -> None:
+    # a 60 × 150 px track at (100, 100): bottom edge 175; ε = 0.15 → 22.5 px on the bottom
+    # edge, and |dx| + w_d / 2 <= 1.15 × 30 = 34.5 px along x
+    twh = np.array([60.0, 150.0])
+    cases = [  # (detection centre, size), partial?
+        ((100.0, 130.0), (40.0, 90.0), True),  # bottom edges equal
+        ((100.0, 152.0), (40.0, 90.0), True),  # bottom 197: 22 px below
+        ((100.0, 153.0), (40.0, 90.0), False),  # 23 px below
+        ((100.0, 100.0), (40.0, 90.0), False),  # bottom 145: a person farther away
+        ((114.0, 130.0), (40.0, 90.0), True),  # 14 + 20 = 34 <= 34.5
+        ((115.0, 130.0), (40.0, 90.0), False),  # 35 > 34.5
+        ((100.0, 90.0), (80.0, 170.0), False),  # larger: never a partial view
+    ]
+    for (x, y), wh, want in cases:
+        got = fa.partial_views(twh, np.array(wh), np.array(x - 100.0), np.array(y - 100.0), 0.15)
+        assert bool(got) is want, (x, y, wh)
+
+
+def _partial_scene(rng, n, m, spread):
+    """A scene where the first third of the tracks have a detection on their foot point that
+    is a partial view (smaller than the size gate allows) and the rest random boxes."""
+    txy, dxy = _scene(rng, n, m, spread)
+    twh = rng.uniform(20, 60, (n, 2))
+    dwh = rng.uniform(10, 60, (m, 2))
+    k = min(n // 3, m)
+    dwh[:k] = twh[:k] * rng.uniform(0.3, 0.6, (k, 2))
+    dxy[:k, 0] = txy[:k, 0] + rng.uniform(-0.1, 0.1, k) * twh[:k, 0]
+    dxy[:k, 1] = txy[:k, 1] + 0.5 * (twh[:k, 1] - dwh[:k, 1]) + rng.normal(0, 2, k)
+    return txy, dxy, twh, dwh
+
+
+@pytest.mark.parametrize("n, m", [(6, 7), (100, 97), (900, 880)])  # dense, band, grid gating
+def test_gate_pairs_lets_exactly_the_partial_views_through_the_size_gate(n, m) -> None:
+    rng = np.random.default_rng(n + 5)
+    txy, dxy, twh, dwh = _partial_scene(rng, n, m, 12.0 * np.sqrt(n))
+    big = 1e6  # a gate that passes every pair: only the size decides
+    ti, dj, _ = fa.gate_pairs(txy, dxy, None, big, (twh, dwh, 0.0, 1.5, 0.15))
+    got = set(zip(ti.tolist(), dj.tolist(), strict=True))
+    want = set()
+    for i in range(n):  # by hand, pair by pair
+        tw, th = twh[i]
+        for j in range(m):
+            (dw, dh), (dx, dy) = dwh[j], dxy[j] - txy[i]
+            same = max(dw / tw, tw / dw, dh / th, th / dh) <= 1.5
+            part = (dh < th and abs(dy + (dh - th) / 2) <= 0.15 * th
+                    and abs(dx) + dw / 2 <= 1.15 * tw / 2)
+            if same or part:
+                want.add((i, j))
+    assert got == want
+    assert any(max(twh[i] / dwh[j]) > 1.5 for i, j in want)  # partial views were tested
+
+
+@pytest.mark.parametrize("stretch", [False, True])
+def test_dense_stages_with_partial_views_equal_sparse_gating(stretch: bool) -> None:
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        txy, dxy, twh, dwh = _partial_scene(rng, 30, 33, 120.0)
+        f2 = rng.uniform(1.0, 6.0, (30, 2)) if stretch else None
+        size = (twh, dwh, 0.5, 1.5, 0.15)
+        t1, d1 = fa.optimal(*fa.gate_pairs(txy, dxy, f2, 400.0, size), 30, 33, 400.0)
+        o1, p1 = fa.dense_optimal(txy, dxy, f2, 400.0, size)
+        assert set(zip(o1.tolist(), p1.tolist(), strict=True)) == set(
+            zip(t1.tolist(), d1.tolist(), strict=True)
+        )
+        mt, md, _ = fa.dense_two_stage(txy, dxy, f2, 400.0, 900.0, f2, size)
+        lt = np.setdiff1d(np.arange(30), t1)
+        ld = np.setdiff1d(np.arange(33), d1)
+        size2 = (twh[lt], dwh[ld], 0.5, 1.5, 0.15)
+        t2, d2 = fa.optimal(
+            *fa.gate_pairs(txy[lt], dxy[ld], None if f2 is None else f2[lt], 900.0, size2),
+            lt.size, ld.size, 900.0,
+        )
+        want = set(zip(t1.tolist(), d1.tolist(), strict=True)) | set(
+            zip(lt[t2].tolist(), ld[d2].tolist(), strict=True)
+        )
+        assert set(zip(mt.tolist(), md.tolist(), strict=True)) == want

@@ -462,7 +462,7 @@ def test_size_gate_keeps_a_box_of_another_size_from_a_track() -> None:
         frames.append(Detections(k, p[None], np.array(wh)))
     config = TrackerConfig(fps=25.0, size_gate=None)
     assert track_detections(frames, config).track_ids.tolist() == [1]
-    assert TrackerConfig().size_gate == 2.0  # on by default
+    assert TrackerConfig().size_gate == 1.5  # on by default
     gated = track_detections(frames, config.replace(size_gate=2.0))
     assert gated.track_ids.tolist() == [1, 2]
     assert gated[n - 1].track_id.tolist() == [2]
@@ -471,6 +471,63 @@ def test_size_gate_keeps_a_box_of_another_size_from_a_track() -> None:
     for tf in frames[12:]:
         tf.wh[:] = [60.0, 120.0]
     assert track_detections(frames, config.replace(size_gate=2.0)).track_ids.tolist() == [1]
+
+
+def _lower_body_frames(n, hidden):
+    """A 60 × 150 px person walking right at 2 px/frame, detected whole except on the frames
+    ``hidden``, where only the lower body is: a 50 × 90 px box on the same bottom edge."""
+    xy = _line([300.0, 200.0], [2.0, 0.0], n)
+    frames = []
+    for k in range(n):
+        if k in hidden:
+            c, wh = xy[k] + (1.0, 30.0), [[50.0, 90.0]]  # bottom edge 275, as the person's
+        else:
+            c, wh = xy[k], [[60.0, 150.0]]
+        frames.append(Detections(k, c[None], np.array(wh)))
+    return xy, frames
+
+
+def test_a_partial_view_below_an_occluder_keeps_the_track_and_its_box() -> None:
+    # the lower body alone for 15 frames (0.6 s, longer than a track coasts): the size gate
+    # (150 / 90 > 1.5) lets it through as a partial view; the track measures the foot point
+    # and keeps its own box, so its rows stay on the whole person
+    n, hidden = 40, range(12, 27)
+    xy, frames = _lower_body_frames(n, hidden)
+    config = TrackerConfig(fps=25.0)
+    assert config.partial_tolerance == 0.15  # on by default
+    log = track_detections(frames, config)
+    assert log.track_ids.tolist() == [1]
+    for k in hidden:
+        tf = log[k]
+        assert tf.track_id.tolist() == [1] and tf.det_index.tolist() == [0]
+        np.testing.assert_allclose(tf.wh, [[60.0, 150.0]])
+        # measured: the centre of the track's box standing on the detection's bottom edge
+        np.testing.assert_allclose(tf.measured_xy[0], xy[k] + (1.0, 0.0))
+        assert np.abs(tf.filtered_xy[0] - xy[k]).max() < 2.0  # the whole person's centre
+    # without the rule the gate refuses the lower body: the track is lost, the lower body
+    # starts a track of its own
+    alone = track_detections(frames, config.replace(partial_tolerance=None))
+    assert len(alone.track_ids) > 1
+    assert alone[20].wh.tolist() == [[50.0, 90.0]]
+
+
+def test_a_smaller_box_higher_up_is_not_a_partial_view() -> None:
+    # the same small box with its bottom edge 40 px above the person's (someone farther
+    # away on the ground plane) is refused as before
+    n, hidden = 40, range(12, 27)
+    _, frames = _lower_body_frames(n, hidden)
+    for k in hidden:
+        frames[k].xy[0, 1] -= 40.0
+    log = track_detections(frames, TrackerConfig(fps=25.0))
+    assert len(log.track_ids) > 1
+    assert 1 not in log[20].track_id.tolist()
+
+
+def test_partial_tolerance_must_be_a_fraction() -> None:
+    for bad in (-0.1, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="partial_tolerance"):
+            TrackerConfig(partial_tolerance=bad)
+    assert TrackerConfig(partial_tolerance=None).partial_tolerance is None
 
 
 def test_size_gate_must_be_a_ratio_above_one() -> None:

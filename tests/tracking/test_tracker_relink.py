@@ -56,9 +56,12 @@ def test_another_object_gets_a_new_id(after, height, why) -> None:
 
 
 def test_no_link_after_the_window() -> None:
-    frames = _walker(range(30, 90), seconds=6.0)  # 2.4 s hidden, window 2 s
+    frames = _walker(range(30, 90), seconds=6.0)  # 2.4 s hidden
+    assert TrackerConfig().relink_window == 3.0
+    assert _ids(frames) == [1]
+    assert _ids(frames, relink_window=2.0) == [1, 2]
+    frames = _walker(range(30, 115), seconds=7.0)  # 3.4 s hidden, beyond the default window
     assert _ids(frames) == [1, 2]
-    assert _ids(frames, relink_window=3.0) == [1]
 
 
 def test_the_same_at_10_and_at_30_fps() -> None:

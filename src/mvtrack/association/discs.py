@@ -57,20 +57,67 @@ _EMPTY = np.zeros(0, dtype=np.intp)
 
 #: the box-size term of the cost: ``(track wh (N, 2), detection wh (M, 2), weight)``, and
 #: optionally a fourth element, the size gate ``ρ > 1`` (pairs whose widths or heights differ
-#: by more than the factor ``ρ`` are not gated)
-SizeTerm = tuple[FloatArray, FloatArray, float] | tuple[FloatArray, FloatArray, float, float]
+#: by more than the factor ``ρ`` are not gated), and a fifth, the tolerance ``ε`` of the
+#: partial views that the size gate lets through (:func:`partial_views`)
+SizeTerm = (
+    tuple[FloatArray, FloatArray, float]
+    | tuple[FloatArray, FloatArray, float, float]
+    | tuple[FloatArray, FloatArray, float, float, float]
+)
 
 
 
 def size_term(
-    twh: FloatArray, dwh: FloatArray, weight: float, size_gate: float | None
+    twh: FloatArray, dwh: FloatArray, weight: float, size_gate: float | None,
+    partial: float | None = None,
 ) -> SizeTerm | None:
     """The box-size term of a Euclidean stage for tracks of box sizes ``twh`` against
-    detections of sizes ``dwh``: ``weight`` (``TrackerConfig.size_weight``) and the size gate
-    ``size_gate`` (``TrackerConfig.size_gate``), or ``None`` when there is neither."""
+    detections of sizes ``dwh``: ``weight`` (``TrackerConfig.size_weight``), the size gate
+    ``size_gate`` (``TrackerConfig.size_gate``) and the tolerance of the partial views it lets
+    through (``TrackerConfig.partial_tolerance``), or ``None`` when there is none of them."""
     if size_gate is not None:
+        if partial is not None:
+            return (twh, dwh, weight, size_gate, partial)
         return (twh, dwh, weight, size_gate)
     return (twh, dwh, weight) if weight else None
+
+
+def size_apart(twh: FloatArray, dwh: FloatArray, rho: float) -> NDArray[np.bool_]:
+    """Boxes whose widths or heights differ by more than the factor ``rho`` (``twh``, ``dwh``
+    broadcast against each other: a matrix or aligned pairs; NaN sizes are never apart)."""
+    # max(a, b) > ρ min(a, b)  ⟺  |ln a − ln b| > ln ρ: logs of the (N, 2) and (M, 2) sizes,
+    # then three (N, M) operations per axis instead of five on (N, M, 2)
+    lt, ld = np.log(twh), np.log(dwh)
+    dw = np.abs(ld[..., 0] - lt[..., 0])
+    dh = np.abs(ld[..., 1] - lt[..., 1])
+    return np.maximum(dw, dh, out=dw) > math.log(rho)
+
+
+def partial_views(
+    twh: FloatArray, dwh: FloatArray, dx: FloatArray, dy: FloatArray, eps: float
+) -> NDArray[np.bool_]:
+    r"""Detections that may be the visible part of the track's object: the lower part of a
+    person partly hidden, standing where the track stands.
+
+    A detection box (centre offset ``(dx, dy)`` from the track's centre, size ``dwh``) smaller
+    than the track's box ``twh`` in height is a partial view when its bottom edge lies within
+    ``ε h_t`` of the track's and it lies inside the track's box widened by ``ε`` along x:
+
+    .. math::
+
+        h_d < h_t, \qquad |dy + h_d/2 - h_t/2| \le \varepsilon h_t, \qquad
+        |dx| + w_d/2 \le (1 + \varepsilon)\, w_t/2.
+
+    On a ground plane the bottom edge is the foot point, which fixes the distance from the
+    camera: a smaller box whose feet stand where the track's do is not a person farther away.
+    Arrays broadcast as in :func:`size_apart`.
+    """
+    tw, th = twh[..., 0], twh[..., 1]
+    dw, dh = dwh[..., 0], dwh[..., 1]
+    foot = np.abs(dy + 0.5 * (dh - th)) <= eps * th
+    foot &= dh < th
+    foot &= np.abs(dx) + 0.5 * dw <= (0.5 + 0.5 * eps) * tw
+    return foot
 
 
 def _cost(dx: FloatArray, dy: FloatArray, scale: FloatArray | None) -> FloatArray:
@@ -105,25 +152,30 @@ def _size_matrix(size: SizeTerm, scale: FloatArray | None) -> FloatArray:
 
 
 def _size_apart(
-    size: SizeTerm | None, twh: FloatArray, dwh: FloatArray
+    size: SizeTerm | None, twh: FloatArray, dwh: FloatArray, dx: FloatArray, dy: FloatArray
 ) -> NDArray[np.bool_] | None:
-    """Pairs whose boxes differ by more than the size gate ``size[3]`` in width or height
-    (``twh``, ``dwh`` broadcast against each other: a matrix or aligned pairs); ``None``
-    without a size gate."""
+    """Pairs that the size gate ``size[3]`` refuses: boxes that differ by more than that
+    factor in width or height (:func:`size_apart`), less the partial views
+    (:func:`partial_views`, tolerance ``size[4]``) — ``twh``, ``dwh`` and the centre offsets
+    ``dx``, ``dy`` broadcast against each other (a matrix or aligned pairs); ``None`` without
+    a size gate."""
     if size is None or len(size) < 4:
         return None
-    # max(a, b) > ρ min(a, b)  ⟺  |ln a − ln b| > ln ρ: logs of the (N, 2) and (M, 2) sizes,
-    # then three (N, M) operations per axis instead of five on (N, M, 2)
-    lt, ld = np.log(twh), np.log(dwh)
-    dw = np.abs(ld[..., 0] - lt[..., 0])
-    dh = np.abs(ld[..., 1] - lt[..., 1])
-    return np.maximum(dw, dh, out=dw) > math.log(size[3])
+    apart = size_apart(twh, dwh, size[3])
+    if len(size) > 4 and np.count_nonzero(apart):
+        apart &= ~partial_views(twh, dwh, dx, dy, size[4])
+    return apart
 
 
-def _mask_apart(cost: FloatArray, size: SizeTerm | None) -> NDArray[np.bool_] | None:
+def _mask_apart(
+    cost: FloatArray, size: SizeTerm | None, dx: FloatArray, dy: FloatArray
+) -> NDArray[np.bool_] | None:
     """Set the costs of the track × detection pairs that the size gate refuses to ``inf``
-    (in place, ``cost`` (N, M)); returns those pairs, or ``None`` without a size gate."""
-    apart = None if size is None else _size_apart(size, size[0][:, None], size[1][None])
+    (in place, ``cost`` (N, M); ``dx``, ``dy`` the detections' offsets from the tracks);
+    returns those pairs, or ``None`` without a size gate."""
+    if size is None:
+        return None
+    apart = _size_apart(size, size[0][:, None], size[1][None], dx, dy)
     if apart is not None:
         cost[apart] = np.inf
     return apart
@@ -155,8 +207,9 @@ def gate_pairs(
     if n == 0 or m == 0:
         return _EMPTY, _EMPTY, np.zeros(0)
     if n * m <= DENSE_GATE:
-        cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
-        _mask_apart(cost, size)
+        dx, dy = dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None]
+        cost = _cost(dx, dy, scale)
+        _mask_apart(cost, size, dx, dy)
         ti, dj = np.nonzero(cost <= gate)
         return ti, dj, _pair_size(ti, dj, cost[ti, dj], scale, gate, size)
     if scale is None:
@@ -173,7 +226,7 @@ def gate_pairs(
     cost = _cost(d[:, 0], d[:, 1], None if scale is None else scale.take(ti, 0))
     keep = cost <= gate
     if size is not None:
-        apart = _size_apart(size, size[0].take(ti, 0), size[1].take(dj, 0))
+        apart = _size_apart(size, size[0].take(ti, 0), size[1].take(dj, 0), d[:, 0], d[:, 1])
         if apart is not None:
             keep &= ~apart
     ti, dj = ti.compress(keep), dj.compress(keep)
@@ -204,8 +257,9 @@ def dense_optimal(
     unmatched, which makes the rectangular problem equivalent to the penalised one (up to a
     constant). ``size`` as in :func:`gate_pairs`. Returns matched (track, detection) rows.
     """
-    cost = _cost(dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None], scale)
-    _mask_apart(cost, size)
+    dx, dy = dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None]
+    cost = _cost(dx, dy, scale)
+    _mask_apart(cost, size, dx, dy)
     ok = cost <= gate  # NaN never passes
     pairs = _isolated(ok)
     if pairs is not None:
@@ -237,7 +291,7 @@ def dense_two_stage(
     dx = dxy[:, 0] - txy[:, 0, None]
     dy = dxy[:, 1] - txy[:, 1, None]
     cost = _cost(dx, dy, scale)  # eq. (8) of paper 2, squared (over S)
-    apart = _mask_apart(cost, size)  # both stages (d2 below is cost, or masked again)
+    apart = _mask_apart(cost, size, dx, dy)  # both stages (d2 below is cost, or masked again)
     plain = scale is None and scale2 is None
     d2 = cost if plain else None  # the second stage's costs (copied before cost changes)
     ok = cost <= gate  # NaN never passes

@@ -184,6 +184,17 @@ class TrackerConfig:
         track that may not jump to a box of another scale is also one the relinking can join
         up; the video pipeline turns it off for the disturbance map's blobs, which merge and
         split (:func:`mvtrack.video.resolve_settings`).
+    partial_tolerance : float or None
+        A fraction of the track's box height. The size gate still pairs a track with a
+        detection box smaller than its own when the box stands where the track stands: its
+        bottom edge within this fraction of the track's height of the track's, and inside the
+        track's box along x (widened by the same fraction) — the visible part of a partly
+        hidden person, e.g. a detector firing on the legs below an occluder
+        (:func:`mvtrack.association.discs.partial_views`). Such a detection measures the foot
+        point only: the track is updated at ``(x_d, y_d + h_d/2 − h_t/2)``, the centre of its
+        own box standing on the detection's bottom edge, and keeps its box size. ``None``: the
+        size gate refuses every such box. Default 0.15, chosen by leave-one-sequence-out on
+        the MOT15 development sequences (``docs/bench/mot15-defaults.md``).
     min_track_length : float or None
         Seconds. Offline runs only (:func:`~mvtrack.tracking.track_detections`): a track with
         fewer output rows than this many seconds of frames is left out whole
@@ -281,6 +292,7 @@ class TrackerConfig:
     coast_output: float | None = 0.08
     size_weight: float = 0.5
     size_gate: float | None = 1.5
+    partial_tolerance: float | None = 0.15
     backfill: bool = True
     interpolate: bool = True
     min_track_length: float | None = 0.3
@@ -324,6 +336,11 @@ class TrackerConfig:
             isinstance(g, (int, float)) and math.isfinite(g) and g > 1.0
         ):
             raise bad("size_gate", "must be a finite ratio > 1 or None")
+        p = self.partial_tolerance
+        if p is not None and not (
+            isinstance(p, (int, float)) and math.isfinite(p) and 0.0 <= p < 1.0
+        ):
+            raise bad("partial_tolerance", "must be a fraction in [0, 1) or None")
         for name in ("backfill", "interpolate", "low_tentative"):
             if not isinstance(getattr(self, name), bool):
                 raise bad(name, "must be True or False")

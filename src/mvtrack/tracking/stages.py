@@ -95,6 +95,11 @@ class Associator:
         self._size_gate = (
             float(sgate) if sgate is not None and self._fast_gate == "euclidean" else None
         )
+        #: tolerance of the partial views the size gate lets through (config.partial_tolerance)
+        self.partial = (
+            None if self._size_gate is None or config.partial_tolerance is None
+            else float(config.partial_tolerance)
+        )
         self._recover_hits = max(config.recover_min_hits, self._fp.confirm_hits)
         c = config
         self.scores = (
@@ -416,7 +421,7 @@ class Associator:
         dxy = left[:, :2]
         size = None  # the size gate only (no size term in this cost)
         if self._size_gate is not None:
-            size = (tf[:, WH], left[:, 2:], 0.0, self._size_gate)
+            size = discs.size_term(tf[:, WH], left[:, 2:], 0.0, self._size_gate, self.partial)
         if cand.size * ud.size <= discs.DENSE_LSA:
             mt, md = discs.dense_optimal(last_xy, dxy, r2, 1.0, size)
         else:
@@ -426,7 +431,7 @@ class Associator:
 
     def _size_term(self, twh: FloatArray, dwh: FloatArray) -> discs.SizeTerm | None:
         """The size term and size gate of a Euclidean stage (:func:`discs.size_term`)."""
-        return discs.size_term(twh, dwh, self._size_w, self._size_gate)
+        return discs.size_term(twh, dwh, self._size_w, self._size_gate, self.partial)
 
     def size_scale2(self, wh: FloatArray) -> FloatArray:
         """Per-axis size factors squared (:func:`gating.size_factors2`) for boxes ``wh``."""

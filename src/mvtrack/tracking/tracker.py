@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack.association.discs import size_apart
 from mvtrack.association.regions import GateRegions
 from mvtrack.filters.predictors import make_predictor
 from mvtrack.tracking.config import TrackerConfig
@@ -237,8 +238,10 @@ class Tracker:
         pred = self.predictor
         # each track's detection (x, y, w, h); NaN for the tracks without one (index −1)
         zwh = drow.take(det_index, 0)
-        z = zwh[:, :2]
         matched = det_index >= 0
+        if self.associator.partial is not None and n_matched:
+            zwh = self._complete_partial(zwh, tab.floats[:, WH], matched)
+        z = zwh[:, :2]
         rescued = None
         held = matched
         if rescue is not None:
@@ -265,6 +268,23 @@ class Tracker:
             np.add(wh, self.config.size_smoothing * (zwh[:, 2:] - wh), out=wh,
                    where=matched[:, None])
         return TrackTable(ints, flo), ps, matched, rescued, z
+
+    def _complete_partial(self, zwh: FloatArray, twh: FloatArray, matched: BoolArray
+                          ) -> FloatArray:
+        """The measurements ``zwh`` (x, y, w, h per track) with each partial view
+        (:func:`~mvtrack.association.discs.partial_views`: a matched detection the size gate
+        let through although the boxes' sizes differ by more than its factor) replaced by the
+        track's own box standing on the detection's bottom edge, ``(x_d, y_d + h_d/2 − h_t/2,
+        w_t, h_t)``; ``zwh`` itself when there is none."""
+        part = size_apart(twh, zwh[:, 2:], self.config.size_gate)
+        part &= matched
+        if not np.count_nonzero(part):
+            return zwh
+        zwh = zwh.copy()
+        tp = twh[part]
+        zwh[part, 1] += 0.5 * (zwh[part, 3] - tp[:, 1])  # the foot point: bottom edges equal
+        zwh[part, 2:] = tp  # the size of the visible part says nothing of the object's
+        return zwh
 
     def _life_cycle(
         self, tab: TrackTable, ps: Any, gxy: FloatArray, det_index: IntArray,
