@@ -156,9 +156,8 @@ def _size_apart(
 ) -> NDArray[np.bool_] | None:
     """Pairs that the size gate ``size[3]`` refuses: boxes that differ by more than that
     factor in width or height (:func:`size_apart`), less the partial views
-    (:func:`partial_views`, tolerance ``size[4]``) — ``twh``, ``dwh`` and the centre offsets
-    ``dx``, ``dy`` broadcast against each other (a matrix or aligned pairs); ``None`` without
-    a size gate."""
+    (:func:`partial_views`, tolerance ``size[4]``) — aligned pairs of sizes ``twh``, ``dwh``
+    and centre offsets ``dx``, ``dy``; ``None`` without a size gate."""
     if size is None or len(size) < 4:
         return None
     apart = size_apart(twh, dwh, size[3])
@@ -168,16 +167,23 @@ def _size_apart(
 
 
 def _mask_apart(
-    cost: FloatArray, size: SizeTerm | None, dx: FloatArray, dy: FloatArray
+    cost: FloatArray, size: SizeTerm | None, dx: FloatArray, dy: FloatArray, reach: float
 ) -> NDArray[np.bool_] | None:
     """Set the costs of the track × detection pairs that the size gate refuses to ``inf``
     (in place, ``cost`` (N, M); ``dx``, ``dy`` the detections' offsets from the tracks);
-    returns those pairs, or ``None`` without a size gate."""
-    if size is None:
+    returns those pairs, or ``None`` without a size gate. The partial views are looked for
+    among the pairs with ``cost <= reach`` only (the widest gate this mask serves): the others
+    are never gated whatever their sizes."""
+    if size is None or len(size) < 4:
         return None
-    apart = _size_apart(size, size[0][:, None], size[1][None], dx, dy)
-    if apart is not None:
-        cost[apart] = np.inf
+    twh, dwh = size[0], size[1]
+    apart = size_apart(twh[:, None], dwh[None], size[3])
+    if len(size) > 4:
+        i, j = (apart & (cost <= reach)).nonzero()
+        if i.size:
+            part = partial_views(twh.take(i, 0), dwh.take(j, 0), dx[i, j], dy[i, j], size[4])
+            apart[i.compress(part), j.compress(part)] = False
+    cost[apart] = np.inf
     return apart
 
 
@@ -209,7 +215,7 @@ def gate_pairs(
     if n * m <= DENSE_GATE:
         dx, dy = dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None]
         cost = _cost(dx, dy, scale)
-        _mask_apart(cost, size, dx, dy)
+        _mask_apart(cost, size, dx, dy, gate)
         ti, dj = np.nonzero(cost <= gate)
         return ti, dj, _pair_size(ti, dj, cost[ti, dj], scale, gate, size)
     if scale is None:
@@ -225,12 +231,13 @@ def gate_pairs(
     d = dxy.take(dj, 0) - txy.take(ti, 0)
     cost = _cost(d[:, 0], d[:, 1], None if scale is None else scale.take(ti, 0))
     keep = cost <= gate
+    ti, dj, cost, d = ti.compress(keep), dj.compress(keep), cost.compress(keep), d[keep]
     if size is not None:
         apart = _size_apart(size, size[0].take(ti, 0), size[1].take(dj, 0), d[:, 0], d[:, 1])
         if apart is not None:
-            keep &= ~apart
-    ti, dj = ti.compress(keep), dj.compress(keep)
-    return ti, dj, _pair_size(ti, dj, cost.compress(keep), scale, gate, size)
+            keep = ~apart
+            ti, dj, cost = ti.compress(keep), dj.compress(keep), cost.compress(keep)
+    return ti, dj, _pair_size(ti, dj, cost, scale, gate, size)
 
 
 def _pair_size(
@@ -259,7 +266,7 @@ def dense_optimal(
     """
     dx, dy = dxy[:, 0] - txy[:, 0, None], dxy[:, 1] - txy[:, 1, None]
     cost = _cost(dx, dy, scale)
-    _mask_apart(cost, size, dx, dy)
+    _mask_apart(cost, size, dx, dy, gate)
     ok = cost <= gate  # NaN never passes
     pairs = _isolated(ok)
     if pairs is not None:
@@ -291,8 +298,11 @@ def dense_two_stage(
     dx = dxy[:, 0] - txy[:, 0, None]
     dy = dxy[:, 1] - txy[:, 1, None]
     cost = _cost(dx, dy, scale)  # eq. (8) of paper 2, squared (over S)
-    apart = _mask_apart(cost, size, dx, dy)  # both stages (d2 below is cost, or masked again)
     plain = scale is None and scale2 is None
+    # both stages (d2 below is cost, or masked again); the second stage's costs are on the
+    # first's scale when scale2 is scale (the tracker's Euclidean stages), else all pairs count
+    reach = max(gate, gate2) if plain or scale2 is scale else np.inf
+    apart = _mask_apart(cost, size, dx, dy, reach)
     d2 = cost if plain else None  # the second stage's costs (copied before cost changes)
     ok = cost <= gate  # NaN never passes
     s = None
