@@ -161,8 +161,8 @@ def test_gate_pairs_size_gate_drops_exactly_the_pairs_of_another_size(n, m) -> N
     twh, dwh = rng.uniform(10, 60, (n, 2)), rng.uniform(10, 60, (m, 2))
     ti, dj, sized = fa.gate_pairs(txy, dxy, f2, 100.0, (twh, dwh, 0.3))
     gi, gj, gated = fa.gate_pairs(txy, dxy, f2, 100.0, (twh, dwh, 0.3, 2.0))
-    ratio = np.maximum(dwh[dj] / twh[ti], twh[ti] / dwh[dj]).max(axis=1)
-    same = ratio <= 2.0
+    ratio = np.maximum(dwh[dj] / twh[ti], twh[ti] / dwh[dj])
+    same = (ratio[:, 1] <= 2.0) & (ratio[:, 0] <= 4.0)  # heights ρ, widths ρ²
     assert same.any() and not same.all()
     np.testing.assert_array_equal(gi, ti[same])  # the others are left untouched
     np.testing.assert_array_equal(gj, dj[same])
@@ -202,8 +202,8 @@ def test_dense_stages_with_a_size_gate_equal_sparse_gating(stretch: bool) -> Non
         f2 = rng.uniform(1.0, 6.0, (30, 2)) if stretch else None
         twh, dwh = rng.uniform(10, 60, (30, 2)), rng.uniform(10, 60, (33, 2))
         mt, md = _dense_equals_sparse_stages(txy, dxy, f2, twh, dwh, (0.5, 1.8), 25.0, 144.0)
-        ratio = np.maximum(dwh[md] / twh[mt], twh[mt] / dwh[md]).max(axis=1)
-        assert (ratio <= 1.8).all()
+        ratio = np.maximum(dwh[md] / twh[mt], twh[mt] / dwh[md])
+        assert (ratio[:, 1] <= 1.8).all() and (ratio[:, 0] <= 1.8**2).all()
 
 
 @pytest.mark.parametrize("gate, gate2", [(25.0, 144.0), (144.0, 25.0)])
@@ -275,7 +275,7 @@ def test_gate_pairs_lets_exactly_the_partial_views_through_the_size_gate(n, m) -
         tw, th = twh[i]
         for j in range(m):
             (dw, dh), (dx, dy) = dwh[j], dxy[j] - txy[i]
-            same = max(dw / tw, tw / dw, dh / th, th / dh) <= 1.5
+            same = max(dh / th, th / dh) <= 1.5 and max(dw / tw, tw / dw) <= 1.5**2
             part = (dh < th and abs(dy + (dh - th) / 2) <= 0.15 * th
                     and abs(dx) + dw / 2 <= 1.15 * tw / 2)
             if same or part:

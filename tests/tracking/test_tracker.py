@@ -473,6 +473,19 @@ def test_size_gate_keeps_a_box_of_another_size_from_a_track() -> None:
     assert track_detections(frames, config.replace(size_gate=2.0)).track_ids.tolist() == [1]
 
 
+def test_size_gate_is_loose_on_the_width_a_stride_changes() -> None:
+    # a walker seen from the side: the box is 40 or 62 px wide by turns (legs together, legs
+    # apart; 62 / 40 > 1.5), always 150 px high: one track, with the default gate of 1.5;
+    # gating the width at 1.5 too would refuse every other box
+    n = 30
+    xy = _line([300.0, 200.0], [3.0, 0.0], n)
+    frames = [Detections(k, xy[k][None], np.array([[62.0 if k % 2 else 40.0, 150.0]]))
+              for k in range(n)]
+    log = track_detections(frames, TrackerConfig(fps=25.0))
+    assert log.track_ids.tolist() == [1]
+    assert all(tf.det_index.tolist() == [0] for tf in log[2:])
+
+
 def _lower_body_frames(n, hidden):
     """A 60 × 150 px person walking right at 2 px/frame, detected whole except on the frames
     ``hidden``, where only the lower body is: a 50 × 90 px box on the same bottom edge."""

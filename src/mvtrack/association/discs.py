@@ -56,9 +56,10 @@ DENSE_CONFLICT = 10_000
 _EMPTY = np.zeros(0, dtype=np.intp)
 
 #: the box-size term of the cost: ``(track wh (N, 2), detection wh (M, 2), weight)``, and
-#: optionally a fourth element, the size gate ``ρ > 1`` (pairs whose widths or heights differ
-#: by more than the factor ``ρ`` are not gated), and a fifth, the tolerance ``ε`` of the
-#: partial views that the size gate lets through (:func:`partial_views`)
+#: optionally a fourth element, the size gate ``ρ > 1`` (pairs whose heights differ by more
+#: than the factor ``ρ`` or widths by more than ``ρ²`` are not gated, :func:`size_apart`),
+#: and a fifth, the tolerance ``ε`` of the partial views that the size gate lets through
+#: (:func:`partial_views`)
 SizeTerm = (
     tuple[FloatArray, FloatArray, float]
     | tuple[FloatArray, FloatArray, float, float]
@@ -83,14 +84,24 @@ def size_term(
 
 
 def size_apart(twh: FloatArray, dwh: FloatArray, rho: float) -> NDArray[np.bool_]:
-    """Boxes whose widths or heights differ by more than the factor ``rho`` (``twh``, ``dwh``
-    broadcast against each other: a matrix or aligned pairs; NaN sizes are never apart)."""
+    """Boxes whose heights differ by more than the factor ``rho`` or widths by more than
+    ``rho²`` (``twh``, ``dwh`` broadcast against each other: a matrix or aligned pairs; NaN
+    sizes are never apart).
+
+    The width is gated more loosely because it changes with the pose — a walker's stride, a
+    vehicle that turns — while the height changes with the distance: on the ground-truth
+    boxes of KITTI-17 (10 fps), 0.7 % of a person's boxes differ in width from the average of
+    their earlier ones (size smoothing 0.5) by more than 1.5, none in height; on the
+    detectors' boxes of the MOT15 sequences (one aspect ratio) both tests are the same.
+    """
     # max(a, b) > ρ min(a, b)  ⟺  |ln a − ln b| > ln ρ: logs of the (N, 2) and (M, 2) sizes,
     # then three (N, M) operations per axis instead of five on (N, M, 2)
     lt, ld = np.log(twh), np.log(dwh)
+    limit = math.log(rho)
     dw = np.abs(ld[..., 0] - lt[..., 0])
+    dw *= 0.5  # |ln w_d − ln w_t| > 2 ln ρ
     dh = np.abs(ld[..., 1] - lt[..., 1])
-    return np.maximum(dw, dh, out=dw) > math.log(rho)
+    return np.maximum(dw, dh, out=dw) > limit
 
 
 def partial_views(
@@ -155,7 +166,7 @@ def _size_apart(
     size: SizeTerm | None, twh: FloatArray, dwh: FloatArray, dx: FloatArray, dy: FloatArray
 ) -> NDArray[np.bool_] | None:
     """Pairs that the size gate ``size[3]`` refuses: boxes that differ by more than that
-    factor in width or height (:func:`size_apart`), less the partial views
+    factor in height or its square in width (:func:`size_apart`), less the partial views
     (:func:`partial_views`, tolerance ``size[4]``) — aligned pairs of sizes ``twh``, ``dwh``
     and centre offsets ``dx``, ``dy``; ``None`` without a size gate."""
     if size is None or len(size) < 4:

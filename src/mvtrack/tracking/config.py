@@ -173,11 +173,13 @@ class TrackerConfig:
         a long one more often a target that has left; ``None`` outputs every coasting row.
     size_gate : float or None
         A ratio > 1. With the ``euclidean`` distance (every association stage, recovery
-        included), a track and a detection whose box widths or heights differ by more than
-        this factor (``w_d > ρ w_t`` or ``w_t > ρ w_d``, the same for ``h``; ``wh`` of the
-        track the smoothed one) are never paired, however close: a box twice or half the
+        included), a track and a detection whose box heights differ by more than this factor
+        (``h_d > ρ h_t`` or ``h_t > ρ h_d``; ``wh`` of the track the smoothed one), or widths
+        by more than its square, are never paired, however close: a box twice or half the
         size is another object (a person nearer or farther away, or a different one), the
-        consistency that the overlap enforces in IoU association. ``None`` disables it.
+        consistency that the overlap enforces in IoU association. The width, which changes
+        with a walker's stride or a vehicle's turn, is gated more loosely
+        (:func:`mvtrack.association.discs.size_apart`). ``None`` disables it.
         Default 1.5, for a detector's boxes: the leave-one-sequence-out choice on the MOT15
         development sequences among the gates that leave the noisy-ground-truth benchmark as
         it was (1.4 costs it; ``docs/bench/mot15-defaults.md``), where a

@@ -93,7 +93,7 @@ def default(fps: float = 30.0) -> TrackerConfig:
     gates and the recovery margin hold for boxes up to 50 px and stretch per axis with larger
     boxes (``size_ref``). Confirmation on 2 consecutive hits; a track coasts up to 0.3 s but
     its coasting rows are output only for the first 0.08 s (``coast_output``). A track and a
-    detection whose box widths or heights differ by more than a factor 1.5 are never paired
+    detection whose box heights differ by more than a factor 1.5 (widths 1.5²) are never paired
     (``size_gate``; off in the video pipeline). Detection scores are ranked among the
     run's (``score_scale="auto"``): the lowest 20 % are dropped (``min_score``), those below
     the median only extend established tracks (``score_high``) or, overlapping no track and no
