@@ -189,11 +189,10 @@ def _mask_apart(
         return None
     twh, dwh = size[0], size[1]
     apart = size_apart(twh[:, None], dwh[None], size[3])
-    if len(size) > 4:
+    if len(size) > 4:  # the pairs apart but near enough to be gated, less the partial views
         i, j = (apart & (cost <= reach)).nonzero()
         if i.size:
-            part = partial_views(twh.take(i, 0), dwh.take(j, 0), dx[i, j], dy[i, j], size[4])
-            apart[i.compress(part), j.compress(part)] = False
+            apart[i, j] = _size_apart(size, twh.take(i, 0), dwh.take(j, 0), dx[i, j], dy[i, j])
     cost[apart] = np.inf
     return apart
 
