@@ -32,9 +32,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.association.discs import size_apart
+from mvtrack.association.discs import DENSE_LSA, size_apart
 from mvtrack.association.regions import GateRegions
+from mvtrack.filters.cv import CVState
 from mvtrack.filters.predictors import make_predictor
+from mvtrack.tracking import compiled
 from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.lifecycle import (
     CONFIRMED,
@@ -75,6 +77,8 @@ BoolArray = NDArray[np.bool_]
 #: ``rescue(uids (K,), predicted_xy (K, 2), wh (K, 2)) -> (found (K,) bool, xy (K, 2))``
 RescueFn = Callable[[IntArray, FloatArray, FloatArray], tuple[Any, Any]]
 
+_NONE = np.zeros(0, dtype=np.intp)
+
 __all__ = ["RescueFn", "TrackTable", "Tracker"]
 
 
@@ -107,6 +111,11 @@ class Tracker:
     config : TrackerConfig, optional
         Predictor, distance, assignment rule, gate and life cycle (default
         :class:`TrackerConfig()`).
+    core : {"auto", "numpy"}
+        ``"auto"``: frames of at most :data:`~mvtrack.association.discs.DENSE_LSA` track ×
+        detection pairs run through the compiled step (:mod:`mvtrack.tracking.compiled`)
+        when it covers ``config`` (the default family); ``"numpy"``: always the array step.
+        Both give the same tracks.
 
     Raises
     ------
@@ -134,14 +143,21 @@ class Tracker:
     ([1], [0])
     """
 
-    def __init__(self, config: TrackerConfig | None = None) -> None:
+    def __init__(self, config: TrackerConfig | None = None, core: str = "auto") -> None:
         self.config = TrackerConfig() if config is None else config
         if not isinstance(self.config, TrackerConfig):
             raise ValueError(f"Tracker: config must be a TrackerConfig, got {type(config)}")
+        if core not in ("auto", "numpy"):
+            raise ValueError(f"Tracker: core must be 'auto' or 'numpy', got {core!r}")
         self._fp = self.config.frames()
         self.predictor = _build_predictor(self.config)
         #: the association stages (gate centres, first stage, second gate, recovery, low)
         self.associator = Associator(self.config, self.predictor)
+        #: the compiled step's settings, or None when it does not cover the configuration
+        self._compiled = (
+            compiled.params(self.config, self.associator, self.predictor)
+            if core == "auto" and compiled.covers(self.config, self.predictor) else None
+        )
         self._birth_row = np.array([0, -1, TENTATIVE, 1, 0, 1, 0, 0], dtype=np.int64)
         rw = self.config.relink_window
         self._relink_window = 0 if rw is None else max(1, round(rw * self.config.fps))
@@ -201,7 +217,10 @@ class Tracker:
         drow = detection_rows(dets)  # x, y, w, h per detection, then a row of NaN
         sel = self.associator.score_select(dets) if m else None  # (high, low), None: all high
         out = None
-        if tab.ints.shape[0] == 0:
+        n = tab.ints.shape[0]
+        if n and self._compiled is not None and rescue is None and n * m <= DENSE_LSA:
+            tab, ps, out, ud = self._step_compiled(tab, ps, dets, drow, sel, k)
+        elif n == 0:
             if sel is None:
                 ud = np.arange(m)
             elif self.config.low_birth_iou is not None and sel[1].size:
@@ -226,6 +245,22 @@ class Tracker:
         return self._frame(dets.frame, out, born)
 
     # ---------------------------------------------------------------------------- internals
+
+    def _step_compiled(
+        self, tab: TrackTable, ps: Any, dets: Detections, drow: FloatArray,
+        sel: tuple[NDArray[np.intp], NDArray[np.intp]] | None, k: int,
+    ) -> tuple[TrackTable, Any, tuple, NDArray[np.intp]]:
+        """Predict, associate, update and the next states in one compiled call
+        (:func:`mvtrack.tracking.compiled.frame_step`), then the relinking, the IDs and the
+        output rows as in :meth:`_life_cycle`."""
+        hi, lo = (np.arange(dets.xy.shape[0]), _NONE) if sel is None else sel
+        ints, flo, x, P, gxy, z, det_index, delete, confirmed_now, ud, _ = compiled.frame_step(
+            tab.ints, tab.floats, ps.x, ps.P, drow, dets.score, hi, lo, k, *self._compiled
+        )
+        tab, ps, out = self._close(
+            TrackTable(ints, flo), CVState(x, P), gxy, det_index, z, delete, confirmed_now
+        )
+        return tab, ps, out, ud
 
     def _update(
         self, tab: TrackTable, ps: Any, gxy: FloatArray, r_rows: FloatArray | None,
@@ -293,7 +328,7 @@ class Tracker:
         """Confirm, coast, delete (:func:`~mvtrack.tracking.lifecycle.next_state`); returns
         the surviving tracks and their state, and this frame's output columns and uids of
         the tracks shown."""
-        fp, pred, ints, flo = self._fp, self.predictor, tab.ints, tab.floats
+        fp, ints = self._fp, tab.ints
         state, delete, confirmed_now = next_state(ints, matched, rescued, fp)
         size = self.config.frame_size
         if size is not None:  # a track whose prediction left the image without a detection
@@ -301,6 +336,17 @@ class Tracker:
             out_x = (gxy[:, 0] < 0) | (gxy[:, 0] >= size[0])
             delete |= ~held & (out_x | (gxy[:, 1] < 0) | (gxy[:, 1] >= size[1]))
         ints[:, STATE] = state
+        return self._close(tab, ps, gxy, det_index, z, delete, confirmed_now)
+
+    def _close(
+        self, tab: TrackTable, ps: Any, gxy: FloatArray, det_index: IntArray, z: FloatArray,
+        delete: BoolArray, confirmed_now: BoolArray,
+    ) -> tuple[TrackTable, Any, tuple]:
+        """The end of the life cycle, the new states set in ``tab``: keep the ended tracks
+        for relinking, relink or give IDs to the tracks confirmed now, this frame's output
+        columns and uids, and the deletions."""
+        fp, pred, ints, flo = self._fp, self.predictor, tab.ints, tab.floats
+        state = ints[:, STATE]
         if self._relink_window:
             self._keep_ended(ints, flo, ps, delete)
         if np.count_nonzero(confirmed_now):
