@@ -255,7 +255,8 @@ class Tracker:
         output rows as in :meth:`_life_cycle`."""
         hi, lo = (np.arange(dets.xy.shape[0]), _NONE) if sel is None else sel
         ints, flo, x, P, gxy, z, det_index, delete, confirmed_now, ud, _ = compiled.frame_step(
-            tab.ints, tab.floats, ps.x, ps.P, drow, dets.score, hi, lo, k, *self._compiled
+            tab.ints, tab.floats, ps.x, ps.P, drow, np.ascontiguousarray(dets.score), hi, lo,
+            k, *self._compiled
         )
         tab, ps, out = self._close(
             TrackTable(ints, flo), CVState(x, P), gxy, det_index, z, delete, confirmed_now
