@@ -64,7 +64,8 @@ def _assert_same(a: list, b: list) -> None:
 def _scene(seed: int, n_obj: int = 14, frames: int = 60) -> list[Detections]:
     """People walking through one another in 640 × 480 with everything the stages meet:
     missed boxes, low-scored duplicates beside a person, clutter, lower-body boxes (partial
-    views), boxes of another scale (the size gate), people who stop being detected and come back, raw scores on a DPM-like scale."""
+    views), boxes of another scale (the size gate), people who stop being detected and come
+    back, raw scores on a DPM-like scale."""
     rng = np.random.default_rng(seed)
     pos = rng.uniform([40, 120], [600, 420], size=(n_obj, 2))
     vel = rng.normal(0, 2.5, size=(n_obj, 2))
