@@ -6,9 +6,13 @@ load of this noisy machine falls on both alike; the figures of each are the medi
 fastest of its rounds, and the ratios B / A are what to read. The detections are read before
 the clock starts.
 
+``--core-a`` / ``--core-b`` choose the step of each (``auto``: the compiled one where it
+covers the settings, ``numpy``: the array step; ``Tracker(core=...)``).
+
 Usage::
 
     python benchmarks/bench_paired.py '{"low_birth_iou": null}' '{}' --rounds 9
+    python benchmarks/bench_paired.py '{}' '{}' --core-a numpy --rounds 9
 """
 
 from __future__ import annotations
@@ -26,14 +30,18 @@ DATA = HERE.parent.parent / "shared" / "data" / "real"
 SEQUENCES = {"TUD-Campus": 25.0, "TUD-Stadtmitte": 25.0, "ADL-Rundle-6": 30.0, "KITTI-17": 10.0}
 
 
-def paired(frames: list[Any], configs: list[Any], rounds: int) -> list[list[float]]:
-    """Ms per frame of each configuration in each of ``rounds`` alternating rounds."""
+def paired(frames: list[Any], configs: list[Any], rounds: int,
+           cores: tuple[str, ...] = ("auto", "auto")) -> list[list[float]]:
+    """Ms per frame of each configuration (with the step ``cores[i]``) in each of ``rounds``
+    alternating rounds."""
     from mvtrack.tracking import Tracker
 
+    for config, core in zip(configs, cores, strict=True):
+        Tracker(config, core=core).step(frames[0])  # the compiled step loaded before the clock
     runs: list[list[float]] = [[] for _ in configs]
     for _ in range(rounds):
         for i, config in enumerate(configs):
-            tracker, total = Tracker(config), 0.0
+            tracker, total = Tracker(config, core=cores[i]), 0.0
             for dets in frames:
                 t0 = time.perf_counter()
                 tracker.step(dets)
@@ -47,6 +55,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("a", help="JSON overrides of the default preset for configuration A")
     ap.add_argument("b", help="JSON overrides for configuration B")
     ap.add_argument("--rounds", type=int, default=9)
+    ap.add_argument("--core-a", choices=["auto", "numpy"], default="auto")
+    ap.add_argument("--core-b", choices=["auto", "numpy"], default="auto")
     args = ap.parse_args(argv)
     if not DATA.is_dir():
         print(f"error: {DATA} not found (the MOT15 development sequences)", file=sys.stderr)
@@ -55,13 +65,15 @@ def main(argv: list[str] | None = None) -> int:
     from mvtrack.tracking import preset
 
     over = [json.loads(args.a), json.loads(args.b)]
-    print(f"A = default + {args.a}; B = default + {args.b}; {args.rounds} alternating rounds")
+    print(f"A = default + {args.a} ({args.core_a}); B = default + {args.b} ({args.core_b}); "
+          f"{args.rounds} alternating rounds")
     print("| sequence | A ms/frame, median (fastest) | B ms/frame, median (fastest) | "
           "B / A, medians (fastest) |")
     print("|---|---:|---:|---:|")
     for seq, fps in SEQUENCES.items():
         frames = list(read_detections(DATA / seq / "det.txt"))
-        a, b = paired(frames, [preset("default", fps=fps, **o) for o in over], args.rounds)
+        a, b = paired(frames, [preset("default", fps=fps, **o) for o in over], args.rounds,
+                      (args.core_a, args.core_b))
         ma, mb = statistics.median(a), statistics.median(b)
         print(f"| {seq} | {ma:.3f} ({min(a):.3f}) | {mb:.3f} ({min(b):.3f}) | "
               f"{mb / ma:.2f} ({min(b) / min(a):.2f}) |", flush=True)
