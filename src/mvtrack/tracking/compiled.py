@@ -40,6 +40,8 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 from mvtrack.tracking.config import TrackerConfig
+from mvtrack.tracking.lifecycle import COASTING, CONFIRMED, TENTATIVE
+from mvtrack.tracking.table import AGE, HITS, LAST_K, MISSES, PREV_K, STATE
 
 try:  # numba is a dependency; without it (an unusual platform) the NumPy step runs
     from numba import njit, objmode
@@ -48,9 +50,9 @@ except ImportError:  # pragma: no cover - exercised only where numba is missing
 
 __all__ = ["available", "covers", "frame_step"]
 
-# TrackTable columns (mvtrack.tracking.table) and states (mvtrack.tracking.lifecycle)
-_UID, _TID, _STATE, _HITS, _MISSES, _AGE, _LAST_K, _PREV_K = range(8)
-_TENTATIVE, _CONFIRMED, _COASTING = 0, 1, 2
+# The table's columns and the states are frozen into the compiled code; numba's cache sees
+# changes to this file only, so after changing them in table.py or lifecycle.py delete the
+# cache (__pycache__/compiled.*.nbi, .nbc) — tests/tracking/test_compiled.py fails until then.
 
 
 def available() -> bool:
@@ -78,6 +80,7 @@ def covers(config: TrackerConfig, predictor: Any) -> bool:
 
 
 def _lsa_py(cost: NDArray[np.float64]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``linear_sum_assignment(cost)`` as ``intp`` arrays (what the compiled code expects)."""
     rows, cols = linear_sum_assignment(cost)
     return rows.astype(np.intp), cols.astype(np.intp)
 
@@ -122,6 +125,15 @@ if njit is not None:
         with objmode(rows="intp[:]", cols="intp[:]"):
             rows, cols = _lsa_py(cost)
         return rows, cols
+
+    @njit(cache=True)
+    def _take(a, idx, c0, c1):  # pragma: no cover - compiled
+        """Rows ``idx`` of columns ``c0:c1`` of ``a``, a new contiguous array."""
+        out = np.empty((idx.size, c1 - c0))
+        for r in range(idx.size):
+            for c in range(c0, c1):
+                out[r, c - c0] = a[idx[r], c]
+        return out
 
     @njit(cache=True)
     def _apart(tw, th, dw, dh, limit):  # pragma: no cover - compiled
@@ -321,11 +333,7 @@ if njit is not None:
         gate, gate2, rho, eps, w = pf[_GATE], pf[_GATE2], pf[_RHO], pf[_EPS], pf[_SIZE_W]
         # 3. first and second stage (discs.dense_two_stage) on the high detections
         m1 = hi.size
-        hxy = np.empty((m1, 2))
-        hwh = np.empty((m1, 2))
-        for j in range(m1):
-            hxy[j, 0], hxy[j, 1] = drow[hi[j], 0], drow[hi[j], 1]
-            hwh[j, 0], hwh[j, 1] = drow[hi[j], 2], drow[hi[j], 3]
+        hxy, hwh = _take(drow, hi, 0, 2), _take(drow, hi, 2, 4)
         free_d = np.ones(m1, dtype=np.bool_)
         matched = 0
         if m1 > 0 and n > 0:
@@ -348,26 +356,19 @@ if njit is not None:
         # 4. recovery: lost established tracks near their last measurement
         recovered = np.zeros(n, dtype=np.bool_)
         if pf[_REC_SPEED] >= 0 and ud.size and matched < n:
-            cand = np.nonzero((det_index < 0) & (ints[:, _HITS] >= pi[_REC_HITS])
-                              & (ints[:, _LAST_K] >= k - pi[_REC_WINDOW]))[0]
+            cand = np.nonzero((det_index < 0) & (ints[:, HITS] >= pi[_REC_HITS])
+                              & (ints[:, LAST_K] >= k - pi[_REC_WINDOW]))[0]
             if cand.size:
-                r2 = np.empty((cand.size, 1))
-                lxy = np.empty((cand.size, 2))
-                cwh = np.empty((cand.size, 2))
+                r2 = np.empty((cand.size, 1))  # the radius v_max Δk + margin, squared
                 for a in range(cand.size):
                     i = cand[a]
                     margin = pf[_REC_MARGIN]
                     if scaled:
                         margin = margin * math.sqrt(max(f2[i, 0], f2[i, 1]))
-                    radius = pf[_REC_SPEED] * float(k - ints[i, _LAST_K]) + margin
+                    radius = pf[_REC_SPEED] * float(k - ints[i, LAST_K]) + margin
                     r2[a, 0] = radius * radius
-                    lxy[a, 0], lxy[a, 1] = flo[i, 0], flo[i, 1]
-                    cwh[a, 0], cwh[a, 1] = twh[i, 0], twh[i, 1]
-                uxy = np.empty((ud.size, 2))
-                uwh = np.empty((ud.size, 2))
-                for b in range(ud.size):
-                    uxy[b, 0], uxy[b, 1] = drow[ud[b], 0], drow[ud[b], 1]
-                    uwh[b, 0], uwh[b, 1] = drow[ud[b], 2], drow[ud[b], 3]
+                lxy, cwh = _take(flo, cand, 0, 2), _take(flo, cand, 4, 6)
+                uxy, uwh = _take(drow, ud, 0, 2), _take(drow, ud, 2, 4)
                 cost = _costs(lxy, uxy, r2, False, cwh, uwh, rho, eps, 1.0)
                 rows, cols = _solve(cost, np.arange(cand.size), np.arange(ud.size), 1.0, 0.0,
                                     cwh, uwh, f2)
@@ -383,22 +384,11 @@ if njit is not None:
         if lo.size and matched < n:
             free = det_index < 0
             if not pi[_LOW_TENTATIVE]:
-                free &= ints[:, _STATE] != _TENTATIVE
+                free &= ints[:, STATE] != TENTATIVE
             cand = np.nonzero(free)[0]
             if cand.size:
-                cxy = np.empty((cand.size, 2))
-                cwh = np.empty((cand.size, 2))
-                cf2 = np.empty((cand.size, 2))
-                for a in range(cand.size):
-                    i = cand[a]
-                    cxy[a, 0], cxy[a, 1] = gxy[i, 0], gxy[i, 1]
-                    cwh[a, 0], cwh[a, 1] = twh[i, 0], twh[i, 1]
-                    cf2[a, 0], cf2[a, 1] = f2[i, 0], f2[i, 1]
-                lxy = np.empty((lo.size, 2))
-                lwh = np.empty((lo.size, 2))
-                for b in range(lo.size):
-                    lxy[b, 0], lxy[b, 1] = drow[lo[b], 0], drow[lo[b], 1]
-                    lwh[b, 0], lwh[b, 1] = drow[lo[b], 2], drow[lo[b], 3]
+                cxy, cwh, cf2 = _take(xp, cand, 0, 2), _take(flo, cand, 4, 6), _take(f2, cand, 0, 2)
+                lxy, lwh = _take(drow, lo, 0, 2), _take(drow, lo, 2, 4)
                 cost = _costs(cxy, lxy, cf2, True, cwh, lwh, rho, eps, gate)
                 rows, cols = _solve(cost, np.arange(cand.size), np.arange(lo.size), gate, w,
                                     cwh, lwh, cf2)
@@ -412,7 +402,7 @@ if njit is not None:
                 taken[det_index[i]] = True  # −1: the NaN row
             lo2 = lo[~taken[lo]]
             if lo2.size:
-                keepr = (ints[:, _STATE] != _TENTATIVE) | (det_index >= 0)
+                keepr = (ints[:, STATE] != TENTATIVE) | (det_index >= 0)
                 nk = m1 + np.count_nonzero(keepr)
                 oxy = np.empty((nk, 2))
                 owh = np.empty((nk, 2))
@@ -424,9 +414,7 @@ if njit is not None:
                         oxy[t, 0], oxy[t, 1] = gxy[i, 0], gxy[i, 1]
                         owh[t, 0], owh[t, 1] = twh[i, 0], twh[i, 1]
                         t += 1
-                box = np.empty((lo2.size, 4))
-                for b in range(lo2.size):
-                    box[b] = drow[lo2[b]]
+                box = _take(drow, lo2, 0, 4)
                 ok = _isolated(box, score[lo2], oxy, owh, pf[_LOW_IOU])
                 if np.count_nonzero(ok):
                     ud = np.concatenate((ud, lo2[ok]))
@@ -463,37 +451,37 @@ if njit is not None:
                 if recovered[i]:  # the predictor restarts at the re-acquired detection
                     xn[i, 0], xn[i, 1], xn[i, 2], xn[i, 3] = z[i, 0], z[i, 1], 0.0, 0.0
                     Pn[i, 0], Pn[i, 1], Pn[i, 2] = rr[i], 0.0, pf[_VEL_VAR]
-                ints[i, _HITS] += 1
-                ints[i, _MISSES] = 0
-                ints[i, _PREV_K] = ints[i, _LAST_K]
-                ints[i, _LAST_K] = k
+                ints[i, HITS] += 1
+                ints[i, MISSES] = 0
+                ints[i, PREV_K] = ints[i, LAST_K]
+                ints[i, LAST_K] = k
                 flo[i, 2], flo[i, 3] = flo[i, 0], flo[i, 1]
                 flo[i, 0], flo[i, 1] = z[i, 0], z[i, 1]
                 for d in range(2):
                     flo[i, 4 + d] = flo[i, 4 + d] + pf[_SMOOTH] * (zwh[i, 2 + d] - flo[i, 4 + d])
             else:
-                ints[i, _MISSES] += 1
-            ints[i, _AGE] += 1
+                ints[i, MISSES] += 1
+            ints[i, AGE] += 1
         # 8. life cycle (lifecycle.next_state) and the frame's edge
         delete = np.zeros(n, dtype=np.bool_)
         confirmed_now = np.zeros(n, dtype=np.bool_)
         for i in range(n):
             hit = det_index[i] >= 0
-            misses, age = ints[i, _MISSES], ints[i, _AGE]
-            tentative = ints[i, _STATE] == _TENTATIVE
-            now = tentative and ints[i, _HITS] >= pi[_CONFIRM_HITS] and age <= pi[_CONFIRM_WINDOW]
+            misses, age = ints[i, MISSES], ints[i, AGE]
+            tentative = ints[i, STATE] == TENTATIVE
+            now = tentative and ints[i, HITS] >= pi[_CONFIRM_HITS] and age <= pi[_CONFIRM_WINDOW]
             confirmed_now[i] = now
             if tentative and not now:
-                ints[i, _STATE] = _TENTATIVE
+                ints[i, STATE] = TENTATIVE
                 delete[i] = misses > pi[_TENT_MISSES] or age >= pi[_CONFIRM_WINDOW]
             else:
-                ints[i, _STATE] = _CONFIRMED if hit else _COASTING
+                ints[i, STATE] = CONFIRMED if hit else COASTING
                 delete[i] = misses > pi[_MAX_MISSES]
             if pf[_FRAME_W] >= 0 and not hit:
                 gx, gy = gxy[i, 0], gxy[i, 1]
                 if gx < 0 or gx >= pf[_FRAME_W] or gy < 0 or gy >= pf[_FRAME_H]:
                     delete[i] = True
-        return ints, flo, xn, Pn, gxy, z, det_index, delete, confirmed_now, ud, matched
+        return ints, flo, xn, Pn, gxy, z, det_index, delete, confirmed_now, ud
 
 
 def frame_step(
@@ -523,7 +511,5 @@ def frame_step(
         The tracks that end this frame and those confirmed just now.
     ud : (B,) intp
         The detections that start tentative tracks, high ones first.
-    matched : int
-        The number of tracks with a detection.
     """
     return _frame_step(ints, flo, x, P, drow, score, hi, lo, k, pf, pi)

@@ -254,7 +254,7 @@ class Tracker:
         (:func:`mvtrack.tracking.compiled.frame_step`), then the relinking, the IDs and the
         output rows as in :meth:`_life_cycle`."""
         hi, lo = (np.arange(dets.xy.shape[0]), _NONE) if sel is None else sel
-        ints, flo, x, P, gxy, z, det_index, delete, confirmed_now, ud, _ = compiled.frame_step(
+        ints, flo, x, P, gxy, z, det_index, delete, confirmed_now, ud = compiled.frame_step(
             tab.ints, tab.floats, ps.x, ps.P, drow, np.ascontiguousarray(dets.score), hi, lo,
             k, *self._compiled
         )
