@@ -173,6 +173,16 @@ def test_a_rescue_callback_takes_the_array_step(monkeypatch: pytest.MonkeyPatch)
     assert steps[0] == 0
 
 
+def test_without_numba_the_array_step_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(compiled, "njit", None)  # what the import leaves when numba is missing
+    assert not compiled.available()
+    frames = _scene(11, frames=15)
+    tracker = Tracker(preset("default", fps=25.0))
+    assert tracker._compiled is None
+    _assert_same([tracker.step(d) for d in frames],
+                 _run(preset("default", fps=25.0), frames, "numpy"))
+
+
 def test_unknown_core_is_refused() -> None:
     with pytest.raises(ValueError, match="core must be 'auto' or 'numpy'"):
         Tracker(core="fast")
