@@ -65,7 +65,7 @@ def _scene(seed: int, n_obj: int = 14, frames: int = 60) -> list[Detections]:
     """People walking through one another in 640 × 480 with everything the stages meet:
     missed boxes, low-scored duplicates beside a person, clutter, lower-body boxes (partial
     views), boxes of another scale (the size gate), people who stop being detected and come
-    back, raw scores on a DPM-like scale."""
+    back, frames without a box, a box given twice, raw scores on a DPM-like scale."""
     rng = np.random.default_rng(seed)
     pos = rng.uniform([40, 120], [600, 420], size=(n_obj, 2))
     vel = rng.normal(0, 2.5, size=(n_obj, 2))
@@ -99,6 +99,12 @@ def _scene(seed: int, n_obj: int = 14, frames: int = 60) -> list[Detections]:
             xy.append(rng.uniform([0, 0], [640, 480]))
             wh.append(rng.uniform([15, 30], [60, 150]))
             sc.append(rng.uniform(-1, 30))
+        if k in (40, 41):  # frames without a box
+            xy, wh, sc = [], [], []
+        elif k == 45 and xy:  # a box given twice, exactly (ties in every cost)
+            xy.append(xy[0])
+            wh.append(wh[0])
+            sc.append(sc[0])
         order = rng.permutation(len(xy))
         out.append(Detections(k, np.array(xy, float).reshape(-1, 2)[order],
                               np.array(wh, float).reshape(-1, 2)[order],
