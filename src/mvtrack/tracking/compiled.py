@@ -402,28 +402,21 @@ if njit is not None:
                 taken[det_index[i]] = True  # −1: the NaN row
             lo2 = lo[~taken[lo]]
             if lo2.size:
-                keepr = (ints[:, STATE] != TENTATIVE) | (det_index >= 0)
-                nk = m1 + np.count_nonzero(keepr)
-                oxy = np.empty((nk, 2))
-                owh = np.empty((nk, 2))
-                oxy[:m1] = hxy
-                owh[:m1] = hwh
-                t = m1
-                for i in range(n):
-                    if keepr[i]:
-                        oxy[t, 0], oxy[t, 1] = gxy[i, 0], gxy[i, 1]
-                        owh[t, 0], owh[t, 1] = twh[i, 0], twh[i, 1]
-                        t += 1
+                # the high detections and the predicted boxes of the tracks that live on
+                live = np.nonzero((ints[:, STATE] != TENTATIVE) | (det_index >= 0))[0]
+                oxy = np.concatenate((hxy, _take(xp, live, 0, 2)))
+                owh = np.concatenate((hwh, _take(flo, live, 4, 6)))
                 box = _take(drow, lo2, 0, 4)
                 ok = _isolated(box, score[lo2], oxy, owh, pf[_LOW_IOU])
                 if np.count_nonzero(ok):
                     ud = np.concatenate((ud, lo2[ok]))
         # 7. measurement update, eqs. (3)–(5) of paper 1, and the table's columns
         zwh = np.empty((n, 4))
+        limit = math.log(rho) if rho > 0 else 0.0
         for i in range(n):
             zwh[i] = drow[det_index[i]]
             if eps >= 0 and det_index[i] >= 0 and _apart(
-                    twh[i, 0], twh[i, 1], zwh[i, 2], zwh[i, 3], math.log(rho)):
+                    twh[i, 0], twh[i, 1], zwh[i, 2], zwh[i, 3], limit):
                 # a partial view: the track's box standing on the detection's bottom edge
                 zwh[i, 1] += 0.5 * (zwh[i, 3] - twh[i, 1])
                 zwh[i, 2], zwh[i, 3] = twh[i, 0], twh[i, 1]
