@@ -7,7 +7,7 @@ over the file::
     preset = "paper1"         # "default", "paper1" or "paper2"
     predictor = "rls"
     gate = 10.0
-    second_gate = "none"      # TOML has no null: "none" unsets a field (turns a stage off)
+    birth_iou = "none"        # TOML has no null: "none" unsets a field (turns a rule off)
 
     [detector]                # the front end, then its parameters
     name = "disturbance-map"

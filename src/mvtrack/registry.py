@@ -74,6 +74,10 @@ PREDICTORS: dict[str, Choice] = {
         "per-axis constant-velocity Kalman filter in closed form",
         "mvtrack.filters.cv:KalmanCVPredictor",
     ),
+    "kalman-imm": Choice(
+        "steady and manoeuvring constant-velocity Kalman filters mixed (IMM)",
+        "mvtrack.filters.imm:KalmanIMMPredictor",
+    ),
     "kalman-coupled": Choice(
         "one 2-D Kalman filter per track (full position covariance, paper 2)",
         "mvtrack.filters.coupled_kalman:CoupledKalmanPredictor",

@@ -1,65 +1,322 @@
-"""Assignment of detections to tracks from gated pairs: nearest (papers), greedy, optimal.
+"""Assignment of detections to tracks through their gates: nearest (papers), greedy, optimal.
 
-Input is the sparse output of :func:`mvtrack.association.gating.candidate_pairs`: aligned arrays
-``ti`` (track rows), ``dj`` (detection rows) and ``cost`` of the gated pairs. Non-pairs are
-forbidden.
+The tracker's association of one frame is :func:`associate`, a compiled kernel
+(:func:`mvtrack.jit.kernel`) over the gate of :mod:`mvtrack.association.gate`:
 
-Rules (``ASSIGN_RULES``):
+1. **candidate pairs** inside the gate — the quadratic gate ``Δᵀ S⁻¹ Δ + w_s ‖ln(wh_d /
+   wh_t)‖² ≤ g`` (:func:`quadratic_pairs`, pairs found through a grid on the image for
+   large frames, so the work grows with the pairs, not with ``N × M``) or a given cost
+   matrix (``iou``, ``coupled-literal``: :func:`matrix_pairs`);
+2. **stages by detection score** (ByteTrack's): every track against the high-score
+   detections, then the tracks left over against the low-score ones;
+3. **a rule** per stage (``ASSIGN_RULES``):
 
-- ``nearest`` — the papers' rule (paper 1 §"prediction-point decision", paper 2 Fig. 3): each
-  track takes its nearest gated detection. Non-exclusive: two tracks may share a detection.
-- ``greedy`` — exclusive nearest: pairs accepted in increasing cost, skipping used tracks or
-  detections.
-- ``optimal`` — global minimum-cost exclusive assignment (``scipy.optimize.linear_sum_assignment``
-  or the sparse LAPJVsp of ``scipy.sparse.csgraph.min_weight_full_bipartite_matching``), solved
-  per connected component of the gate graph so the cost grows with cluster size, not N × M.
-  It minimises Σ cost over the matched pairs + u/2 per unmatched track and per unmatched
-  detection (the cost-of-non-assignment form), i.e. it maximises Σ (u − cost) over the
-  matches: a pair is only worth matching when its cost is below ``u``. Passing the gate as
-  ``unmatched_cost`` gives the global-nearest-neighbour reading (maximise the total slack
-  inside the gates). The default ``u = 2 · max |cost|`` makes every gated pair worth matching
-  on its own and trades one more match against up to that much extra cost, close to
-  "as many matches as possible, then least cost" without the huge penalty an exact
-  maximum-cardinality solve needs (which makes the shortest-path solver very slow).
+   - ``nearest`` — the papers' rule (paper 1 §"prediction-point decision", paper 2 Fig. 3):
+     each track takes its nearest gated detection; non-exclusive, two tracks may share one;
+   - ``greedy`` — exclusive nearest: pairs accepted in increasing cost;
+   - ``optimal`` — the global nearest neighbour: the exclusive assignment that minimises
+     ``Σ cost + u`` per pair of unmatched track and detection, ``u`` the gate (a gated pair
+     is always worth matching on its own; a conflict is settled by the least total cost),
+     solved per connected component of the gate graph — directly where a component is one
+     pair, by SciPy's ``linear_sum_assignment`` where it is a conflict.
 
-Ties are broken deterministically by (cost, track row, detection row)
-(:mod:`mvtrack.association.order`). The optimal solver is :mod:`mvtrack.association.optimal`.
+Ties are broken by (cost, track row, detection row). :func:`assign` is the same rules on
+any list of pairs (the crossing experiment, :mod:`mvtrack.association.explain`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import linear_sum_assignment
 
 from mvtrack import registry
-from mvtrack.association.optimal import (
-    DENSE_FRAME_NODES,
-    SMALL_NODES,
-    SPARSE_CLUSTERS,
-    solve_optimal,
-    solve_sparse,
-)
-from mvtrack.association.order import best_of, first_per_group, rank_pairs
+from mvtrack.jit import kernel, python_call
 
 IntArray = NDArray[np.intp]
 FloatArray = NDArray[np.float64]
 
-__all__ = [
-    "ASSIGN_RULES",
-    "DENSE_FRAME_NODES",
-    "SMALL_NODES",
-    "SPARSE_CLUSTERS",
-    "Assignment",
-    "assign",
-    "first_per_group",
-    "solve_sparse",
-]
+__all__ = ["ASSIGN_RULES", "RULE_CODES", "Assignment", "assign", "associate"]
 
 #: the rules by name (:data:`mvtrack.registry.ASSIGN_RULES`)
 ASSIGN_RULES = tuple(registry.ASSIGN_RULES)
+#: the rules as the kernels know them
+RULE_CODES = {"nearest": 0, "greedy": 1, "optimal": 2}
+_NEAREST, _GREEDY, _OPTIMAL = 0, 1, 2
+#: detection classes of :func:`associate` (by calibrated score, :mod:`mvtrack.tracking.scores`)
+DROPPED, LOW, HIGH = 0, 1, 2
+#: below this many track × detection tests a frame is gated pair by pair, above through a grid
+_DENSE_TESTS = 4096
+
+
+# ------------------------------------------------------------------------------ candidate pairs
+
+
+@kernel
+def _pair_cost(i: int, j: int, cx: FloatArray, S: FloatArray, twh: FloatArray,
+               dxy: FloatArray, dwh: FloatArray, size_w: float, size_log: float) -> float:
+    """The gate's value of track ``i`` and detection ``j`` (``inf`` outside the size gate).
+
+    ``S`` (N, 3) is the gate's covariance ``[[s_xx, s_xy], [s_xy, s_yy]]`` as ``(s_xx, s_xy,
+    s_yy)``; the value is ``Δᵀ S⁻¹ Δ`` plus ``size_w`` times the squared log ratios of the
+    widths and heights. ``size_log > 0`` refuses pairs whose heights differ by more than the
+    factor ``e^size_log`` or widths by more than its square.
+    """
+    sxx, sxy, syy = S[i, 0], S[i, 1], S[i, 2]
+    det = sxx * syy - sxy * sxy
+    dx, dy = dxy[j, 0] - cx[i, 0], dxy[j, 1] - cx[i, 1]
+    d2 = (syy * dx * dx - 2.0 * sxy * dx * dy + sxx * dy * dy) / det  # Δᵀ S⁻¹ Δ
+    if size_w > 0.0 or size_log > 0.0:
+        lw = math.log(dwh[j, 0] / twh[i, 0])
+        lh = math.log(dwh[j, 1] / twh[i, 1])
+        if size_log > 0.0 and (abs(lh) > size_log or abs(lw) > 2.0 * size_log):
+            return math.inf
+        d2 += size_w * (lw * lw + lh * lh)
+    return d2
+
+
+@kernel
+def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_],
+                    dxy: FloatArray, dwh: FloatArray, dsel: NDArray[np.bool_], gate: float,
+                    size_w: float, size_log: float) -> tuple[IntArray, IntArray, FloatArray]:
+    """The pairs of selected tracks and detections inside the quadratic gate, with their
+    values (:func:`_pair_cost`), sorted by track then detection.
+
+    A track's gate reaches ``√(g s_xx)`` along x and ``√(g s_yy)`` along y. A small frame is
+    tested pair by pair; a large one bins the detections into square cells of the mean
+    reach and tests each track against the cells its reach covers.
+    """
+    n, m = cx.shape[0], dxy.shape[0]
+    tr = np.flatnonzero(tsel)
+    dr = np.flatnonzero(dsel)
+    cap = 16 + 4 * (tr.size + dr.size)
+    ti = np.empty(cap, np.intp)
+    dj = np.empty(cap, np.intp)
+    cost = np.empty(cap, np.float64)
+    k = 0
+    if tr.size == 0 or dr.size == 0 or n == 0 or m == 0:
+        return ti[:0], dj[:0], cost[:0]
+    if tr.size * dr.size <= _DENSE_TESTS:
+        for i in tr:
+            rx, ry = math.sqrt(gate * S[i, 0]), math.sqrt(gate * S[i, 2])
+            for j in dr:
+                if abs(dxy[j, 0] - cx[i, 0]) > rx or abs(dxy[j, 1] - cx[i, 1]) > ry:
+                    continue
+                c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w, size_log)
+                if c <= gate:
+                    if k == cap:
+                        cap *= 2
+                        ti, dj, cost = _grow(ti, dj, cost, cap)
+                    ti[k], dj[k], cost[k] = i, j, c
+                    k += 1
+        return ti[:k], dj[:k], cost[:k]
+    # a grid of square cells over the detections
+    reach = np.empty(tr.size)
+    for a in range(tr.size):
+        i = tr[a]
+        reach[a] = max(math.sqrt(gate * S[i, 0]), math.sqrt(gate * S[i, 2]))
+    cell = max(reach.mean(), 1.0)
+    x0 = dxy[dr, 0].min()
+    y0 = dxy[dr, 1].min()
+    nx = int((dxy[dr, 0].max() - x0) / cell) + 1
+    ny = int((dxy[dr, 1].max() - y0) / cell) + 1
+    key = np.empty(dr.size, np.int64)
+    for b in range(dr.size):
+        j = dr[b]
+        key[b] = int((dxy[j, 0] - x0) / cell) * ny + int((dxy[j, 1] - y0) / cell)
+    order = np.argsort(key, kind="mergesort")
+    skey = key[order]
+    for a in range(tr.size):
+        i = tr[a]
+        rx, ry = math.sqrt(gate * S[i, 0]), math.sqrt(gate * S[i, 2])
+        gx0 = max(math.floor((cx[i, 0] - rx - x0) / cell), 0)
+        gx1 = min(math.floor((cx[i, 0] + rx - x0) / cell), nx - 1)
+        gy0 = max(math.floor((cx[i, 1] - ry - y0) / cell), 0)
+        gy1 = min(math.floor((cx[i, 1] + ry - y0) / cell), ny - 1)
+        first = k
+        for gx in range(gx0, gx1 + 1):
+            lo = np.searchsorted(skey, gx * ny + gy0)
+            hi = np.searchsorted(skey, gx * ny + gy1, side="right")
+            for p in range(lo, hi):
+                j = dr[order[p]]
+                if abs(dxy[j, 0] - cx[i, 0]) > rx or abs(dxy[j, 1] - cx[i, 1]) > ry:
+                    continue
+                c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w, size_log)
+                if c <= gate:
+                    if k == cap:
+                        cap *= 2
+                        ti, dj, cost = _grow(ti, dj, cost, cap)
+                    ti[k], dj[k], cost[k] = i, j, c
+                    k += 1
+        if k - first > 1:  # this track's pairs in detection order
+            o = np.argsort(dj[first:k], kind="mergesort")
+            dj[first:k] = dj[first:k][o]
+            cost[first:k] = cost[first:k][o]
+    return ti[:k], dj[:k], cost[:k]
+
+
+@kernel
+def _grow(ti: IntArray, dj: IntArray, cost: FloatArray, cap: int
+          ) -> tuple[IntArray, IntArray, FloatArray]:
+    t2, d2, c2 = np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap, np.float64)
+    k = ti.size
+    t2[:k], d2[:k], c2[:k] = ti, dj, cost
+    return t2, d2, c2
+
+
+@kernel
+def matrix_pairs(cost: FloatArray, tsel: NDArray[np.bool_], dsel: NDArray[np.bool_],
+                 gate: float) -> tuple[IntArray, IntArray, FloatArray]:
+    """The pairs of selected rows and columns of a cost matrix within ``gate``."""
+    n, m = cost.shape
+    k = 0
+    ti = np.empty(n * m, np.intp)
+    dj = np.empty(n * m, np.intp)
+    c = np.empty(n * m, np.float64)
+    for i in range(n):
+        if not tsel[i]:
+            continue
+        for j in range(m):
+            if dsel[j] and cost[i, j] <= gate:
+                ti[k], dj[k], c[k] = i, j, cost[i, j]
+                k += 1
+    return ti[:k], dj[:k], c[:k]
+
+
+# ------------------------------------------------------------------------------------- rules
+
+
+@kernel
+def _lsa(block: FloatArray) -> tuple[IntArray, IntArray]:
+    """SciPy's ``linear_sum_assignment`` of a dense block (from compiled code: a call back)."""
+    with python_call(rows="intp[:]", cols="intp[:]"):
+        r, c = linear_sum_assignment(block)
+        rows, cols = r.astype(np.intp), c.astype(np.intp)
+    return rows, cols
+
+
+@kernel
+def _find(parent: IntArray, a: int) -> int:
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
+@kernel
+def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: int,
+          unmatched: float, det_index: IntArray) -> None:
+    """Assign the pairs ``(ti, dj, cost)`` (sorted by track, then detection) by ``rule``;
+    writes each matched track's detection into ``det_index`` (N,) in place.
+
+    ``unmatched`` is the cost ``u`` of leaving a track and a detection unmatched
+    (``optimal`` only).
+    """
+    p = ti.size
+    if p == 0:
+        return
+    if rule == _NEAREST:  # each track its nearest; ties → the lower detection row
+        best = np.full(n, math.inf)
+        for q in range(p):
+            if cost[q] < best[ti[q]]:
+                best[ti[q]] = cost[q]
+                det_index[ti[q]] = dj[q]
+        return
+    if rule == _GREEDY:
+        order = np.argsort(cost, kind="mergesort")  # stable: (cost, track, detection)
+        tused = np.zeros(n, np.bool_)
+        dused = np.zeros(m, np.bool_)
+        for q in order:
+            if not tused[ti[q]] and not dused[dj[q]]:
+                tused[ti[q]] = True
+                dused[dj[q]] = True
+                det_index[ti[q]] = dj[q]
+        return
+    # optimal: connected components of the gate graph (tracks 0..n-1, detections n..n+m-1)
+    parent = np.arange(n + m)
+    for q in range(p):
+        a, b = _find(parent, ti[q]), _find(parent, n + dj[q])
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+    root = np.empty(p, np.intp)
+    size = np.zeros(n + m, np.intp)
+    for q in range(p):
+        root[q] = _find(parent, ti[q])
+        size[root[q]] += 1
+    order = np.argsort(root, kind="mergesort")
+    q0 = 0
+    while q0 < p:
+        r = root[order[q0]]
+        q1 = q0 + size[r]
+        if q1 - q0 == 1:  # one pair: no conflict
+            q = order[q0]
+            det_index[ti[q]] = dj[q]
+        else:
+            idx = order[q0:q1]
+            rows = np.unique(ti[idx])
+            cols = np.unique(dj[idx])
+            block = np.full((rows.size, cols.size), unmatched)
+            for q in idx:
+                a = np.searchsorted(rows, ti[q])
+                b = np.searchsorted(cols, dj[q])
+                block[a, b] = cost[q]
+            ra, ca = _lsa(block)
+            for e in range(ra.size):
+                if block[ra[e], ca[e]] < unmatched:
+                    det_index[rows[ra[e]]] = cols[ca[e]]
+        q0 = q1
+
+
+# ------------------------------------------------------------------------------- one frame
+
+
+@kernel
+def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
+              dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8], gate: float,
+              size_w: float, size_log: float, rule: int) -> IntArray:
+    """The detection of every track in one frame (−1: none), in two stages by score.
+
+    Parameters
+    ----------
+    cx, S : (N, 2), (N, 3)
+        Gate centres and covariances (:class:`mvtrack.association.gate.Gate`).
+    cost : (N, M) or (0, 0)
+        A cost matrix for the gates that are not quadratic (``iou``, ``coupled-literal``);
+        empty for the quadratic ones.
+    twh, dxy, dwh : (N, 2), (M, 2), (M, 2)
+        Track box sizes, detection centres and sizes.
+    dclass : (M,) int8
+        ``HIGH`` (2), ``LOW`` (1) or ``DROPPED`` (0): every track is matched against the high
+        detections first, then the tracks left over against the low ones.
+    gate, size_w, size_log, rule
+        The gate on the value, the weight of the size term, the size gate (log of the
+        factor; 0: none) and the rule (:data:`RULE_CODES`).
+    """
+    n, m = cx.shape[0], dxy.shape[0]
+    det_index = np.full(n, -1, np.intp)
+    if n == 0 or m == 0:
+        return det_index
+    tsel = np.ones(n, np.bool_)
+    for stage in range(2):
+        dsel = dclass == (HIGH if stage == 0 else LOW)
+        if stage == 1:
+            for i in range(n):
+                tsel[i] = det_index[i] < 0
+        if not dsel.any() or not tsel.any():
+            continue
+        if cost.shape[0] == n and cost.shape[1] == m and n > 0:
+            ti, dj, c = matrix_pairs(cost, tsel, dsel, gate)
+        else:
+            ti, dj, c = quadratic_pairs(cx, S, twh, tsel, dxy, dwh, dsel, gate, size_w,
+                                        size_log)
+        solve(ti, dj, c, n, m, rule, gate, det_index)
+    return det_index
+
+
+# ------------------------------------------------------------------------------ the Python API
 
 
 @dataclass(frozen=True)
@@ -85,126 +342,54 @@ class Assignment:
     unmatched_tracks: IntArray
     unmatched_dets: IntArray
 
-    def __len__(self) -> int:
-        return int(self.track.shape[0])
-
-    def det_of_track(self, n_tracks: int) -> IntArray:
-        """(n_tracks,) detection row per track, ``-1`` when unmatched."""
-        out = np.full(n_tracks, -1, dtype=np.intp)
-        out[self.track] = self.det
-        return out
-
-
-def _finish(t: IntArray, d: IntArray, c: FloatArray, n_tracks: int, n_dets: int) -> Assignment:
-    order = np.argsort(t, kind="stable")
-    t, d, c = t[order], d[order], c[order]
-    used_t = np.zeros(n_tracks, dtype=bool)
-    used_t[t] = True
-    used_d = np.zeros(n_dets, dtype=bool)
-    used_d[d] = True
-    return Assignment(
-        t.astype(np.intp),
-        d.astype(np.intp),
-        c.astype(np.float64),
-        np.flatnonzero(~used_t),
-        np.flatnonzero(~used_d),
-    )
-
-
-def _nearest(ti: IntArray, dj: IntArray, cost: FloatArray, n_tracks: int) -> tuple[IntArray, ...]:
-    rank = rank_pairs(ti, dj, cost)
-    keep = rank == best_of(ti, rank, n_tracks)[ti]  # each track's first pair in the order
-    return ti[keep], dj[keep], cost[keep]
-
-
-def _greedy(
-    ti: IntArray, dj: IntArray, cost: FloatArray, n_tracks: int, n_dets: int
-) -> tuple[IntArray, ...]:
-    """Greedy exclusive matching in increasing (cost, track, det) order.
-
-    Vectorised in rounds: a pair that is the best remaining pair of both its track and its
-    detection is accepted by the sequential greedy too (every earlier pair touches neither
-    node), and removing accepted nodes leaves the greedy order of the rest unchanged.
-    """
-    rank = rank_pairs(ti, dj, cost)
-    alive = np.arange(ti.shape[0])
-    acc: list[IntArray] = []
-    while alive.size:
-        t, d, r = ti[alive], dj[alive], rank[alive]
-        mutual = (best_of(t, r, n_tracks)[t] == r) & (best_of(d, r, n_dets)[d] == r)
-        acc.append(alive[mutual])
-        used_t = np.zeros(n_tracks, dtype=bool)
-        used_t[t[mutual]] = True
-        used_d = np.zeros(n_dets, dtype=bool)
-        used_d[d[mutual]] = True
-        alive = alive[~(used_t[t] | used_d[d])]
-    sel = np.concatenate(acc) if acc else np.zeros(0, dtype=np.intp)
-    return ti[sel], dj[sel], cost[sel]
-
 
 def assign(
-    ti: IntArray,
-    dj: IntArray,
-    cost: FloatArray,
-    n_tracks: int,
-    n_dets: int,
-    rule: Literal["nearest", "greedy", "optimal"] = "optimal",
-    *,
+    ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: str = "optimal",
     unmatched_cost: float | None = None,
-    solver: Literal["auto", "dense", "sparse"] = "auto",
 ) -> Assignment:
-    """Assign detections to tracks from gated pairs.
+    """Assign the candidate pairs ``(ti[p], dj[p])`` with values ``cost[p]`` by ``rule``.
 
     Parameters
     ----------
-    ti, dj : (P,) int
-        Track and detection rows of the allowed (gated) pairs; each pair at most once.
-    cost : (P,) float
-        Their costs (squared distances); NaN is not allowed.
-    n_tracks, n_dets : int
-        Number of tracks N and detections M.
+    ti, dj, cost : (P,) arrays
+        Track rows, detection rows and values of the gated pairs (non-pairs are forbidden).
+    n, m : int
+        Numbers of tracks and detections.
     rule : {"nearest", "greedy", "optimal"}
-        See the module docstring.
     unmatched_cost : float, optional
-        ``optimal`` only: penalty ``u`` for leaving a pair's two ends unmatched (u/2 each);
-        a sensible value is the gate. Default ``2 · max |cost|``.
-    solver : {"auto", "dense", "sparse"}
-        ``optimal`` only: one ``linear_sum_assignment`` per conflicting cluster (``dense``),
-        one sparse LAPJVsp problem for all of them (``sparse``), or ``auto``: a frame with at
-        most :data:`DENSE_FRAME_NODES` gated tracks + detections is one dense problem; otherwise
-        dense per cluster when there are at most :data:`SPARSE_CLUSTERS` conflicting clusters
-        of at most :data:`SMALL_NODES` nodes, else sparse.
+        ``optimal`` only: the cost ``u`` of leaving a track and a detection unmatched (a pair
+        is matched only if that lowers the total); default twice the largest ``|cost|``, so
+        every pair is worth matching on its own.
 
     Returns
     -------
     Assignment
     """
-    ti = np.asarray(ti, dtype=np.intp).ravel()
-    dj = np.asarray(dj, dtype=np.intp).ravel()
-    cost = np.asarray(cost, dtype=np.float64).ravel()
-    if not (ti.shape == dj.shape == cost.shape):
-        raise ValueError(
-            f"assign: ti, dj and cost must have equal length, got {ti.size}, {dj.size}, {cost.size}"
-        )
-    if n_tracks < 0 or n_dets < 0:
-        raise ValueError("assign: n_tracks and n_dets must be non-negative")
-    if ti.size and (ti.min() < 0 or ti.max() >= n_tracks):
-        raise ValueError(f"assign: track index out of range [0, {n_tracks})")
-    if dj.size and (dj.min() < 0 or dj.max() >= n_dets):
-        raise ValueError(f"assign: detection index out of range [0, {n_dets})")
+    if rule not in RULE_CODES:
+        raise ValueError(f"unknown assignment rule {rule!r}; choose one of: "
+                         f"{', '.join(ASSIGN_RULES)}")
+    ti = np.asarray(ti, dtype=np.intp)
+    dj = np.asarray(dj, dtype=np.intp)
+    cost = np.asarray(cost, dtype=np.float64)
+    if not (ti.shape == dj.shape == cost.shape) or ti.ndim != 1:
+        raise ValueError("ti, dj and cost must be 1-D arrays of equal length")
+    if ti.size and (ti.min() < 0 or ti.max() >= n or dj.min() < 0 or dj.max() >= m):
+        raise ValueError(f"pair rows out of range for n={n} tracks and m={m} detections")
     if np.isnan(cost).any():
-        raise ValueError("assign: cost contains NaN")
-    if rule not in ASSIGN_RULES:
-        raise ValueError(f"assign: unknown rule {rule!r}; choose one of: {', '.join(ASSIGN_RULES)}")
-    if solver not in ("auto", "dense", "sparse"):
-        raise ValueError(f"assign: unknown solver {solver!r}")
-    if ti.size == 0:
-        e = np.zeros(0, dtype=np.intp)
-        return _finish(e, e.copy(), np.zeros(0), n_tracks, n_dets)
-    if rule == "nearest":
-        t, d, c = _nearest(ti, dj, cost, n_tracks)
-    elif rule == "greedy":
-        t, d, c = _greedy(ti, dj, cost, n_tracks, n_dets)
-    else:
-        t, d, c = solve_optimal(ti, dj, cost, n_tracks, n_dets, unmatched_cost, solver)
-    return _finish(t, d, c, n_tracks, n_dets)
+        raise ValueError("cost must not contain NaN")
+    order = np.lexsort((dj, ti))
+    ti, dj, cost = ti[order], dj[order], cost[order]
+    u = unmatched_cost
+    if u is None:
+        u = 2.0 * float(np.abs(cost).max()) + 1.0 if cost.size else 1.0
+    det_index = np.full(n, -1, np.intp)
+    solve(ti, dj, cost, n, m, RULE_CODES[rule], float(u), det_index)
+    track = np.flatnonzero(det_index >= 0)
+    det = det_index[track]
+    # the value of each chosen pair
+    pos = np.searchsorted(ti * max(m, 1) + dj, track * max(m, 1) + det) if track.size else track
+    used = np.zeros(m, bool)
+    used[det] = True
+    return Assignment(track.astype(np.intp), det.astype(np.intp), cost[pos],
+                      np.flatnonzero(det_index < 0).astype(np.intp),
+                      np.flatnonzero(~used).astype(np.intp))

@@ -20,10 +20,10 @@ iou             1 − IoU of the boxes                                  0.7
 =============== ===================================================== ==================
 
 The names, their help and their default gates are :data:`mvtrack.registry.DISTANCES` (the one
-table of default gates; :func:`resolve_gate` applies it). Each entry also gives a per-track
-*radius bound* (:mod:`mvtrack.association.radius`): the largest centre distance in pixels at
-which the gate can still pass, so gating can pre-filter pairs spatially (grid hash) before
-computing the exact values. :class:`TrackView` is :mod:`mvtrack.association.view`.
+table of default gates; :func:`resolve_gate` applies it). The tracker does not call these
+functions pair by pair: the quadratic ones are its gate's covariance
+(:mod:`mvtrack.association.gate`, tested equal to them), the others its cost matrix.
+:class:`TrackView` is :mod:`mvtrack.association.view`.
 """
 
 from __future__ import annotations
@@ -36,7 +36,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack import registry
-from mvtrack.association import radius
 from mvtrack.association.view import TrackView, det_arrays
 from mvtrack.registry import CHI2_2DOF_99
 from mvtrack.types import Detections
@@ -55,7 +54,6 @@ __all__ = [
     "det_arrays",
     "distance_matrix",
     "euclidean",
-    "gate_radius",
     "get_distance",
     "iou_cost",
     "mahalanobis",
@@ -252,28 +250,21 @@ class Distance:
         ``pairs(view, det_xy, det_wh, ti, dj, **params) -> (P,)`` values.
     gate : float
         Default gate (pairs with value ``<= gate`` pass).
-    radius : callable
-        ``radius(view, det_wh, gate, **params) -> (N,)``: the largest centre distance in pixels
-        at which each track's gate can still pass (``inf``: no spatial bound).
     params : tuple of str
-        Keyword parameters ``pairs`` and ``radius`` accept.
+        Keyword parameters ``pairs`` accepts.
     """
 
     name: str
     pairs: Callable[..., FloatArray]
     gate: float
-    radius: Callable[..., FloatArray]
     params: tuple[str, ...] = ()
 
 
 def _registered(
-    name: str,
-    pairs: Callable[..., FloatArray],
-    bound: Callable[..., FloatArray],
-    params: tuple[str, ...] = (),
+    name: str, pairs: Callable[..., FloatArray], params: tuple[str, ...] = ()
 ) -> Distance:
     """The distance ``name`` of :data:`mvtrack.registry.DISTANCES`, with its default gate."""
-    return Distance(name, pairs, registry.default_gate(name), bound, params)
+    return Distance(name, pairs, registry.default_gate(name), params)
 
 
 #: the registered distances by name (names, help and default gates:
@@ -281,14 +272,12 @@ def _registered(
 DISTANCES: dict[str, Distance] = {
     d.name: d
     for d in (
-        _registered("euclidean", euclidean, radius.euclidean),
-        _registered("uncoupled", uncoupled, radius.uncoupled, ("use_innovation",)),
-        _registered(
-            "coupled", coupled, radius.coupled, ("rho", "min_speed", "use_innovation")
-        ),
-        _registered("coupled-literal", coupled_literal, radius.unbounded, ("min_speed",)),
-        _registered("mahalanobis", mahalanobis, radius.mahalanobis, ("use_innovation",)),
-        _registered("iou", iou_cost, radius.iou),
+        _registered("euclidean", euclidean),
+        _registered("uncoupled", uncoupled, ("use_innovation",)),
+        _registered("coupled", coupled, ("rho", "min_speed", "use_innovation")),
+        _registered("coupled-literal", coupled_literal, ("min_speed",)),
+        _registered("mahalanobis", mahalanobis, ("use_innovation",)),
+        _registered("iou", iou_cost),
     )
 }
 
@@ -371,18 +360,3 @@ def distance_matrix(
     n, m = len(view), det_xy.shape[0]
     ti, dj = np.divmod(np.arange(n * m, dtype=np.intp), max(m, 1))
     return pair_distance(name, view, dets, ti, dj, **params).reshape(n, m)
-
-
-def gate_radius(
-    name: str | Distance,
-    view: TrackView,
-    dets: Detections | FloatArray,
-    gate: float | None = None,
-    **params: Any,
-) -> FloatArray:
-    """Per-track radius bound (N,) in pixels: beyond it distance ``name`` exceeds ``gate``."""
-    dist = get_distance(name)
-    _check_params(dist, params)
-    _, det_wh = det_arrays(dets)
-    g = resolve_gate(dist, gate)
-    return np.asarray(dist.radius(view, det_wh, g, **params), dtype=np.float64)

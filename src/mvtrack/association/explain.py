@@ -23,7 +23,7 @@ from mvtrack.association.distances import (
     pair_distance,
     resolve_gate,
 )
-from mvtrack.association.gating import candidate_pairs
+from mvtrack.association.gate import Gate
 from mvtrack.types import Detections
 
 #: evaluate nearest-neighbour distances in blocks of at most this many pairs
@@ -142,7 +142,8 @@ def explain(
     Parameters
     ----------
     view, dets, distance, gate, **params
-        As for :func:`mvtrack.association.gating.candidate_pairs`.
+        The tracks, the detections, the distance, its gate and parameters
+        (:class:`mvtrack.association.gate.Gate`).
     assignment : Assignment, optional
         The frame's assignment; computed with ``rule`` when omitted.
     det : int or int array, optional
@@ -158,8 +159,9 @@ def explain(
     g = resolve_gate(dist, gate)
     n, m = len(view), det_arrays(dets)[0].shape[0]
     if assignment is None:
-        ti, dj, cost = candidate_pairs(view, dets, dist, g, **params)
-        assignment = assign(ti, dj, cost, n, m, rule)
+        dxy, dwh = det_arrays(dets)
+        ti, dj, cost = Gate.build(dist.name, view, g, **params).pairs(dxy, dwh)
+        assignment = assign(ti, dj, cost, n, m, rule, unmatched_cost=g)
     det_rows = assignment.unmatched_dets if det is None else np.atleast_1d(det).astype(np.intp)
     trk_rows = (
         assignment.unmatched_tracks if track is None else np.atleast_1d(track).astype(np.intp)

@@ -57,14 +57,19 @@ def register(app: typer.Typer) -> None:
             bool, typer.Option(help="Also write the rows of coasting (missed) tracks.")
         ] = True,
         backfill: Annotated[
-            bool | None,
+            bool,
             typer.Option(
                 "--backfill/--no-backfill",
-                help="Write a confirmed track's rows from its first detection "
-                "(default: the preset's setting).",
-                show_default=False,
+                help="Write a confirmed track's rows from its first detection.",
             ),
-        ] = None,
+        ] = True,
+        interpolate: Annotated[
+            bool,
+            typer.Option(
+                "--interpolate/--no-interpolate",
+                help="Write the frames a track bridged without detection, interpolated.",
+            ),
+        ] = True,
         score_scale: Annotated[
             str | None,
             typer.Option(
@@ -77,8 +82,8 @@ def register(app: typer.Typer) -> None:
         score_high: Annotated[
             float | None,
             typer.Option(
-                help="Calibrated score in [0, 1] from which a detection may start a track and "
-                "is matched first; lower ones only extend tracks (default: the preset's).",
+                help="Calibrated score in [0, 1] from which a detection is matched first; "
+                "lower ones are offered to the tracks left over (default: the preset's).",
                 show_default=False,
             ),
         ] = None,
@@ -90,12 +95,11 @@ def register(app: typer.Typer) -> None:
                 show_default=False,
             ),
         ] = None,
-        low_birth_iou: Annotated[
+        birth_iou: Annotated[
             str | None,
             typer.Option(
-                help="A lower-scored detection that overlaps no track and no stronger box by "
-                "this IoU starts a track that a stronger one must confirm; 'none': only "
-                "detections from --score-high start tracks (default: the preset's, 0.1).",
+                help="A detection left over starts a track only if it overlaps no track's box "
+                "by this IoU; 'none': every one does (default: the preset's, 0.3).",
                 show_default=False,
             ),
         ] = None,
@@ -127,16 +131,14 @@ def register(app: typer.Typer) -> None:
         }
         if gate is not None:
             changes["gate"] = parse_gate(gate)
-        if backfill is not None:
-            changes["backfill"] = backfill
         if score_scale is not None:
             changes["score_scale"] = parse_score_scale(score_scale)
         if score_high is not None:
             changes["score_high"] = score_high
         if min_score is not None:
             changes["min_score"] = min_score
-        if low_birth_iou is not None:
-            changes["low_birth_iou"] = parse_optional_number("--low-birth-iou", low_birth_iou)
+        if birth_iou is not None:
+            changes["birth_iou"] = parse_optional_number("--birth-iou", birth_iou)
         config = make_preset(preset, fps=fps, **changes)
         frames = read_detections(detfile)
         t0 = time.perf_counter()
@@ -153,7 +155,7 @@ def register(app: typer.Typer) -> None:
         # Ctrl-C and SIGTERM end the run at a frame boundary; what was tracked is written
         with _signals.deferred() as stop:
             log = track_detections(stop.until(progress(frames_with_detections(frames))),
-                                   config)
+                                   config, backfill_rows=backfill, interpolate=interpolate)
         bar.close()
         seconds = time.perf_counter() - t0
         dest = out / results_name(detfile)
@@ -165,7 +167,7 @@ def register(app: typer.Typer) -> None:
             f"tracks, {len(log.to_mot(coasting))} rows ({config.predictor}, {config.distance}, "
             f"{config.assign}; {ms:.2f} ms/frame) -> {dest}"
         )
-        typer.echo(f"rows written: {output_policy(config, coasting)}")
+        typer.echo(f"rows written: {output_policy(config, coasting, backfill, interpolate)}")
         if stop.requested:
             print(f"error: {_signals.interrupt_word()} after {done} of {len(frames)} frames; "
                   f"the tracks of those frames are in {dest}", file=sys.stderr)
@@ -187,26 +189,21 @@ def parse_score_scale(text: str) -> str | tuple[float, float]:
     return check_scale(text.strip())
 
 
-def output_policy(config: TrackerConfig, coasting: bool) -> str:
+def output_policy(config: TrackerConfig, coasting: bool, backfill: bool = True,
+                  interpolate: bool = True) -> str:
     """What an offline run of ``config`` writes, in one line."""
     parts = ["confirmed tracks"]
-    if coasting:
-        tail = config.coast_output
-        parts.append("every coasting row" if tail is None else f"coasting rows up to {tail:g} s")
-    if config.backfill and not config.output_tentative:
+    if backfill and not config.output_tentative:
         parts.append("from their first detection (backfill)")
-    if config.interpolate:
-        parts.append("gaps interpolated")
-    if config.relink_window is not None:
-        parts.append(f"a track lost up to {config.relink_window:g} s continued under its ID")
-    if config.min_track_length:
-        parts.append(f"tracks shorter than {config.min_track_length:g} s left out")
+    if interpolate:
+        parts.append("the frames they bridged interpolated")
+    if coasting and config.coast_std is not None:
+        parts.append("coasting rows while the prediction is within "
+                     f"{config.coast_std:g} box sizes")
     if config.score_high is not None:
         scale = config.score_scale if isinstance(config.score_scale, str) else "LO,HI"
-        parts.append(f"started by detections scored >= {config.score_high:g} ({scale} scale)"
-                     + ("" if config.low_birth_iou is None else
-                        f" or by weaker ones overlapping nothing (IoU < {config.low_birth_iou:g})"
-                        + ("" if config.low_tentative else " once a stronger one joins them")))
+        parts.append(f"detections scored >= {config.score_high:g} ({scale} scale) matched "
+                     "first")
     return ", ".join(parts)
 
 

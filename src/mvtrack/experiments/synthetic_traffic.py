@@ -61,8 +61,9 @@ Q_SWEEP = (0.01, 0.03, 0.05, 0.1, 0.3, 1.0)
 def spec_config(predictor: str, fps: float, r: float = SPEC_R, q: float = SPEC_Q
                 ) -> TrackerConfig:
     """Paper 1's tracker with the 10 px gate and the X4 noise values (R, q)."""
-    cfg = paper1(predictor, fps=fps, gate_px=GATE_PX).replace(measurement_std=float(np.sqrt(r)))
-    return cfg.replace(predictor_params={"q": q}) if predictor == "kalman-ca" else cfg
+    cfg = paper1(predictor, fps=fps, gate_px=GATE_PX)
+    params = {"q": q, "r": r} if predictor == "kalman-ca" else {"r": r}
+    return cfg.replace(predictor_params=params)
 
 
 def _where(frame: int) -> str:

@@ -1,19 +1,15 @@
 """``kalman-cv``: the per-axis constant-velocity Kalman filter, in closed form.
 
 The per-axis model :func:`mvtrack.filters.models.constant_velocity` (``H = [1, 0]``) written
-out in scalars: both image axes use the same model, the same initial covariance and the same
-update mask, so their 2×2 covariances are identical (SPEC E2.3) and one ``(a, b, c)`` triple
-per track serves both. A frame then costs a couple of dozen array operations on ``(N,)``
-columns instead of batched matrix products, which is what keeps the tracker's small-``N``
-cost low. ``make_predictor("kalman-cv")`` and the tracker use this one implementation; the
-general per-axis filter (:class:`mvtrack.filters.predictors.PerAxisKalmanPredictor` on the
-same model, kernels :func:`mvtrack.filters.fast.kf_axis_predict` and
-:func:`~mvtrack.filters.fast.kf_axis_update`) is its oracle: ``tests/filters/test_cv.py`` pins
-the two equal to 1e-9, also with a measurement variance per track (the tracker's
-box-size scaling, ``TrackerConfig.size_ref``).
+out in scalars. Each image axis of each track has its own 2×2 covariance ``[[a, b], [b, c]]``
+(position, velocity) and its own noise: the tracker gives every track a measurement variance
+``r`` and a white-acceleration variance ``q`` per axis, proportional to its box's width (x)
+and height (y) (:mod:`mvtrack.tracking.noise`), so one filter serves a far pedestrian of
+40 px and a near bus of 400 px. The general per-axis filter
+(:class:`mvtrack.filters.predictors.PerAxisKalmanPredictor` on the same model) is its oracle:
+``tests/filters/test_cv.py`` pins the two equal to 1e-9.
 
-With ``P = [[a, b], [b, c]]`` per axis, frame interval Δt (1 frame in the tracker),
-``G = [Δt²/2, Δt]ᵀ`` and ``Q = G q Gᵀ``:
+With frame interval Δt, ``G = [Δt²/2, Δt]ᵀ`` and ``Q = G q Gᵀ``, per axis:
 
 .. math::
     \\bar p = p + v Δt,\\quad \\bar a = a + 2 Δt b + Δt^2 c + q Δt^4/4,\\quad
@@ -23,6 +19,9 @@ With ``P = [[a, b], [b, c]]`` per axis, frame interval Δt (1 frame in the track
     S = \\bar a + r,\\; K = [\\bar a, \\bar b]^T / S \\;(3),\\quad
     \\hat x = \\bar x + K (z - \\bar p) \\;(4),\\quad
     a = \\bar a r / S,\\; b = \\bar b r / S,\\; c = \\bar c - \\bar b^2 / S \\;(5)
+
+:func:`cv_predict` and :func:`cv_update` are compiled kernels (:func:`mvtrack.jit.kernel`);
+:class:`KalmanCVPredictor` is the :class:`~mvtrack.filters.base.Predictor` around them.
 """
 
 from __future__ import annotations
@@ -33,9 +32,7 @@ import numpy as np
 
 from mvtrack.filters.base import BoolArray, FloatArray, check_shapes, check_xy
 from mvtrack.filters.models import check_positive
-
-#: the columns of ``(a, b, c)`` that multiply the innovation of ``(px, py, vx, vy)`` in the gain
-_GAIN_COLS = np.array([0, 0, 1, 1])
+from mvtrack.jit import kernel
 
 
 @dataclass(frozen=True)
@@ -46,12 +43,62 @@ class CVState:
     ----------
     x : (N, 4) float64
         ``[px, py, vx, vy]`` in pixels and pixels per frame.
-    P : (N, 3) float64
-        ``[a, b, c]``: the per-axis covariance ``[[a, b], [b, c]]`` shared by x and y.
+    P : (N, 2, 3) float64
+        Per axis (x, then y) the covariance ``[[a, b], [b, c]]`` as ``(a, b, c)``.
     """
 
     x: FloatArray
     P: FloatArray
+
+
+@kernel
+def cv_predict(x: FloatArray, P: FloatArray, q: FloatArray, dt: float
+               ) -> tuple[FloatArray, FloatArray]:
+    """Time update of ``N`` tracks, eqs. (6)–(7) of paper 1 per axis.
+
+    ``q`` (N, 2): white-acceleration variance of each track and axis (px²/frame⁴ for
+    ``dt = 1``). Returns the new ``x`` (N, 4) and ``P`` (N, 2, 3).
+    """
+    n = x.shape[0]
+    xo = np.empty_like(x)
+    Po = np.empty_like(P)
+    dt2 = dt * dt
+    for i in range(n):
+        for ax in range(2):
+            a, b, c, qi = P[i, ax, 0], P[i, ax, 1], P[i, ax, 2], q[i, ax]
+            Po[i, ax, 0] = a + 2.0 * dt * b + dt2 * c + 0.25 * qi * dt2 * dt2  # eq. (7)
+            Po[i, ax, 1] = b + dt * c + 0.5 * qi * dt2 * dt  # eq. (7)
+            Po[i, ax, 2] = c + qi * dt2  # eq. (7)
+            xo[i, ax] = x[i, ax] + dt * x[i, 2 + ax]  # eq. (6): p + v Δt
+            xo[i, 2 + ax] = x[i, 2 + ax]
+    return xo, Po
+
+
+@kernel
+def cv_update(x: FloatArray, P: FloatArray, z: FloatArray, mask: BoolArray, r: FloatArray
+              ) -> tuple[FloatArray, FloatArray]:
+    """Measurement update, eqs. (3)–(5) of paper 1 per axis.
+
+    ``z`` (N, 2) measured positions, ``mask`` (N,) the rows that have one (a row with a NaN
+    coordinate has none), ``r`` (N, 2) measurement variances. Rows without a measurement keep
+    the prediction.
+    """
+    xo = x.copy()
+    Po = P.copy()
+    for i in range(x.shape[0]):
+        if not mask[i] or z[i, 0] != z[i, 0] or z[i, 1] != z[i, 1]:
+            continue
+        for ax in range(2):
+            a, b, c = P[i, ax, 0], P[i, ax, 1], P[i, ax, 2]
+            s = a + r[i, ax]  # S = P̄ + r, eq. (3)
+            ka, kb = a / s, b / s  # K = [a, b]ᵀ / S, eq. (3)
+            nu = z[i, ax] - x[i, ax]
+            xo[i, ax] = x[i, ax] + ka * nu  # eq. (4)
+            xo[i, 2 + ax] = x[i, 2 + ax] + kb * nu  # eq. (4)
+            Po[i, ax, 0] = a * (1.0 - ka)  # eq. (5): a r / S
+            Po[i, ax, 1] = b * (1.0 - ka)  # eq. (5): b r / S
+            Po[i, ax, 2] = c - b * kb  # eq. (5): c − b² / S
+    return xo, Po
 
 
 class KalmanCVPredictor:
@@ -60,17 +107,23 @@ class KalmanCVPredictor:
     Parameters
     ----------
     q : float
-        White-acceleration variance per frame (px²/frame⁴), ``Q = G q Gᵀ``.
+        White-acceleration variance per frame (px²/frame⁴), ``Q = G q Gᵀ``, for the tracks
+        given no ``q`` of their own.
     r : float
-        Measurement-noise variance (px²).
+        Measurement-noise variance (px²), likewise.
     vel_var : float
         Initial velocity variance (px²/frame²); a new track starts at its first measurement
         with zero velocity and ``P₀ = diag(r, vel_var)`` per axis.
     dt : float
         Frame interval (1 frame).
+
+    Every method that uses a noise takes optional per-track, per-axis values (``(N, 2)``
+    arrays) that replace these scalars (``noise_per_track``).
     """
 
     name = "kalman-cv"
+    #: predict, update and init take per-track, per-axis noise (:mod:`mvtrack.tracking.noise`)
+    noise_per_track = True
 
     def __init__(
         self, q: float = 0.1, r: float = 1.0, vel_var: float = 25.0, dt: float = 1.0
@@ -78,64 +131,46 @@ class KalmanCVPredictor:
         self.q = check_positive("q", q)
         self.r = check_positive("r", r)
         self.vel_var = check_positive("vel_var", vel_var)
-        dt = check_positive("dt", dt)
-        self._Ft = np.array(  # x ↦ F x for x = [px, py, vx, vy], as a right multiplication
-            [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [dt, 0.0, 1.0, 0.0],
-             [0.0, dt, 0.0, 1.0]]
-        )
-        # (a, b, c) ↦ F P Fᵀ: a + 2Δt b + Δt² c, b + Δt c, c
-        self._FPF = np.array([[1.0, 0.0, 0.0], [2.0 * dt, 1.0, 0.0], [dt * dt, dt, 1.0]])
-        # G q Gᵀ as (a, b, c), G = [Δt²/2, Δt]ᵀ
-        self._qvec = self.q * np.array([0.25 * dt**4, 0.5 * dt**3, dt * dt])
-        self._P0 = np.array([self.r, 0.0, self.vel_var])  # diag(r, vel_var) as (a, b, c)
+        self.dt = check_positive("dt", dt)
 
-    def init(self, xy: FloatArray, r: FloatArray | None = None) -> CVState:
-        """``K`` new tracks at ``xy`` (K, 2) with zero velocity.
+    def _noise(self, value: FloatArray | None, default: float, n: int) -> FloatArray:
+        if value is None:
+            return np.full((n, 2), default)
+        v = np.asarray(value, dtype=np.float64)
+        return np.broadcast_to(v.reshape(n, -1), (n, 2)) if v.ndim < 2 else v
 
-        ``r`` (K,), optional: per-track measurement variances instead of ``self.r``
-        (``P₀ = diag(r_i, vel_var)``).
-        """
+    def init(self, xy: FloatArray, r: FloatArray | None = None,
+             vel_var: FloatArray | None = None) -> CVState:
+        """``K`` new tracks at ``xy`` (K, 2) with zero velocity, ``P₀ = diag(r, vel_var)`` per
+        axis (``r``, ``vel_var``: (K, 2) or (K,) per track, default the scalars)."""
         xy = check_xy("xy", xy)
         k = xy.shape[0]
         x = np.zeros((k, 4))
         x[:, :2] = xy
-        P = np.empty((k, 3))
-        P[:] = self._P0
-        if r is not None:
-            P[:, 0] = r
+        P = np.zeros((k, 2, 3))
+        P[:, :, 0] = self._noise(r, self.r, k)
+        P[:, :, 2] = self._noise(vel_var, self.vel_var, k)
         return CVState(x, P)
 
-    def predict(self, state: CVState) -> CVState:
-        """Time update of every track, eqs. (6)–(7) of paper 1 in closed form."""
-        x = state.x @ self._Ft  # eq. (6): p + v Δt, v
-        P = state.P @ self._FPF + self._qvec  # eq. (7): F P Fᵀ + G q Gᵀ on (a, b, c)
-        return CVState(x, P)
+    def predict(self, state: CVState, q: FloatArray | None = None) -> CVState:
+        """Time update of every track, eqs. (6)–(7) of paper 1 (``q``: (N, 2) per track)."""
+        n = state.x.shape[0]
+        return CVState(*cv_predict(state.x, state.P, self._noise(q, self.q, n), self.dt))
 
     def update(
         self, state: CVState, z: FloatArray, mask: BoolArray, r: FloatArray | None = None
     ) -> CVState:
-        """Measurement update, eqs. (3)–(5); rows with ``mask`` False or NaN keep the prediction.
-
-        ``r`` (N,), optional: per-track measurement variances instead of ``self.r``.
-        """
-        x, P = state.x, state.P
-        z, mask = check_shapes(z, mask, x.shape[0])
-        nu = z - x[:, :2]  # innovation per axis (NaN where missing)
-        both = nu[:, 0] + nu[:, 1]
-        ok = mask & (both == both)  # and neither coordinate NaN
-        w = ok / (P[:, 0] + (self.r if r is None else r))  # 1/S, eq. (3); 0 where no measurement
-        gain = P.take(_GAIN_COLS, 1) * w[:, None]  # K = [a, b]ᵀ / S, eq. (3), as (a, a, b, b)/S
-        np.copyto(nu, 0.0, where=~ok[:, None])
-        xn = x + gain * np.concatenate((nu, nu), axis=1)  # eq. (4) for (px, py, vx, vy)
-        Pn = P * (1.0 - gain[:, 0])[:, None]  # eq. (5): a r/S, b r/S, c − b²/S
-        Pn[:, 2] = P[:, 2] - P[:, 1] * gain[:, 2]
-        return CVState(xn, Pn)
+        """Measurement update, eqs. (3)–(5); rows with ``mask`` False or NaN keep the prediction
+        (``r``: (N, 2) or (N,) per track)."""
+        n = state.x.shape[0]
+        z, mask = check_shapes(z, mask, n)
+        return CVState(*cv_update(state.x, state.P, z, mask,
+                                  np.ascontiguousarray(self._noise(r, self.r, n))))
 
     def covariance(self, state: CVState) -> FloatArray:
         """Full per-axis covariances (N, 2, 2, 2): ``[[a, b], [b, c]]`` for x and for y."""
-        a, b, c = state.P[:, 0], state.P[:, 1], state.P[:, 2]
-        full = np.stack([np.stack([a, b], -1), np.stack([b, c], -1)], -2)  # (N, 2, 2)
-        return np.repeat(full[:, None], 2, axis=1)
+        a, b, c = state.P[..., 0], state.P[..., 1], state.P[..., 2]
+        return np.stack([np.stack([a, b], -1), np.stack([b, c], -1)], -2)
 
     def position(self, state: CVState) -> FloatArray:
         """Position (N, 2)."""
@@ -146,13 +181,19 @@ class KalmanCVPredictor:
         return state.x[:, 2:]
 
     def position_var(self, state: CVState) -> FloatArray:
-        """Position variance per axis (N,) — the same for x and y."""
-        return state.P[:, 0]
+        """Position variance per axis (N, 2)."""
+        return state.P[:, :, 0]
 
     def position_cov(self, state: CVState) -> FloatArray:
-        """Position covariance (N, 2, 2), ``a I``."""
-        return state.P[:, 0, None, None] * np.eye(2)
+        """Position covariance (N, 2, 2), ``diag(a_x, a_y)``."""
+        out = np.zeros((state.x.shape[0], 2, 2))
+        out[:, 0, 0], out[:, 1, 1] = state.P[:, 0, 0], state.P[:, 1, 0]
+        return out
 
-    def innovation_cov(self, state: CVState) -> FloatArray:
-        """Innovation covariance (N, 2, 2), ``(a + r) I``."""
-        return (state.P[:, 0, None, None] + self.r) * np.eye(2)
+    def innovation_cov(self, state: CVState, r: FloatArray | None = None) -> FloatArray:
+        """Innovation covariance (N, 2, 2), ``diag(a_x + r_x, a_y + r_y)``."""
+        out = self.position_cov(state)
+        rr = self._noise(r, self.r, state.x.shape[0])
+        out[:, 0, 0] += rr[:, 0]
+        out[:, 1, 1] += rr[:, 1]
+        return out

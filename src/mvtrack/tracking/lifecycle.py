@@ -1,20 +1,36 @@
-"""The track life cycle as pure functions over the arrays of all tracks.
+"""The track life cycle, all of it: births, confirmation, coasting, stopped, deletion, IDs.
 
 States (:class:`~mvtrack.types.TrackState`)::
 
-    birth ──> TENTATIVE ──(confirm_hits associations within confirm_window)──> CONFIRMED
-                 │                                                   │  ▲        │
-                 └─(missed > tentative_max_misses, or window over)─> ✗  │ det    │ no det
+    birth ──> TENTATIVE ──(confirm_hits consecutive detections, scores summing to
+                 │          confirm_score)──────────────────────────> CONFIRMED
+                 └─(a frame without detection)─> ✗                   │  ▲        │
+                                                                    det │  │ det    │ no det
                                                                      ▼  │        ▼
-                           STOPPED <──(held by template matching)── COASTING ──(misses >
-                                                                                max_misses)──> ✗
+                           STOPPED <──(held by template matching)── COASTING ──(lost)──> ✗
 
-A confirmed track that gets a detection is ``CONFIRMED``; one that gets none is ``COASTING``
-(its predicted box is output and flagged), unless the video pipeline's template matching
-(``rescue``) finds it, in which case it is ``STOPPED`` (kept alive with the same ID). A
-``STOPPED`` or ``COASTING`` track that gets a detection again is ``CONFIRMED``. Deleted tracks
-(✗) leave the table and are never output. New tracks start from unassigned detections
-(new-target recognition, step 4 of SPEC §2.1).
+Everything is counted in frames, the frames in which the detector could have seen the
+object, and in what the filter knows, never in seconds:
+
+- **birth** (:func:`births`): a detection that no track took, above ``min_score``, whose box
+  overlaps no live track's box by ``birth_iou`` (a second box on an object already tracked
+  starts nothing), starts a tentative track;
+- **confirmation**: ``confirm_hits`` detections in consecutive frames whose calibrated scores
+  (:mod:`mvtrack.tracking.scores`) sum to at least ``confirm_score`` — two strong boxes, or
+  more of weaker ones, make a track; a tentative track dies at its first miss;
+- **coasting and loss**: a confirmed track without detection coasts on its prediction and is
+  **lost** (deleted) once its predicted position is uncertain by more than ``lost_std`` box
+  sizes along either axis (``√P̄_xx > lost_std · w`` or ``√P̄_yy > lost_std · h``), when the
+  filter could no longer tell it from a neighbour — after a few frames for a fast or new
+  object at a low frame rate, after many for a steady one at a high rate — and at the latest
+  after ``max_misses`` frames, or at once when its prediction leaves the image;
+- **rows**: a coasting track's row is written while its prediction is certain to within
+  ``coast_std`` box sizes; tentative rows only when asked (offline backfilling);
+- **IDs**: public IDs are handed out at confirmation, in birth order.
+
+:func:`advance` and :func:`births` are compiled kernels (:func:`mvtrack.jit.kernel`) over
+the table's columns (:mod:`mvtrack.tracking.table`), which are defined here because the
+kernels read them.
 """
 
 from __future__ import annotations
@@ -22,11 +38,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.tracking.config import FrameParams
-from mvtrack.tracking.table import AGE, HITS, MISSES, STATE, TID  # columns of TrackTable.ints
+from mvtrack.jit import kernel
 from mvtrack.types import TrackState
 
 IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 TENTATIVE = int(TrackState.TENTATIVE)
@@ -34,88 +50,151 @@ CONFIRMED = int(TrackState.CONFIRMED)
 COASTING = int(TrackState.COASTING)
 STOPPED = int(TrackState.STOPPED)
 
+#: integer columns of the track table
+UID, TID, STATE, HITS, MISSES, AGE, LAST_K, PREV_K = range(8)
+N_INT = 8
+#: float columns: last measurement (x, y), the one before (x, y), box (w, h), score sum
+LAST_X, LAST_Y, PREV_X, PREV_Y, W, H, SCORE = range(7)
+N_FLOAT = 7
 
-#: what one frame adds to every row: misses and age + 1
-_COUNTER_STEP = np.zeros(8, dtype=np.int64)
-_COUNTER_STEP[[MISSES, AGE]] = 1
-
-
-def count_hits(ints: IntArray, matched: BoolArray, held: BoolArray | IntArray) -> None:
-    """Advance the counters of every track by one frame, in place.
-
-    ``hits`` counts associations with a detection (``matched``); ``misses`` counts
-    consecutive frames without a detection or template match (``held``: a mask of the tracks
-    that got either, or their row indices); ``age`` counts frames since birth.
-    """
-    ints[:, HITS] += matched
-    ints += _COUNTER_STEP  # misses and age + 1 (one add over the whole block)
-    if held.dtype == np.bool_:
-        np.copyto(ints[:, MISSES], 0, where=held)  # cheaper than a masked assignment
-    else:
-        ints[held, MISSES] = 0
+#: life-cycle parameters as :func:`advance` reads them (:meth:`TrackerConfig.life_cycle`)
+(P_CONFIRM_HITS, P_CONFIRM_SCORE, P_MAX_MISSES, P_LOST_STD, P_COAST_STD, P_SMOOTHING,
+ P_TENTATIVE_ROWS, P_FRAME_W, P_FRAME_H) = range(9)
+N_PARAMS = 9
 
 
-def next_state(
-    ints: IntArray, matched: BoolArray, rescued: BoolArray | None, fp: FrameParams
-) -> tuple[IntArray, BoolArray, BoolArray]:
-    """States after one frame, which tracks end, and which were confirmed just now.
+@kernel
+def advance(ints: IntArray, floats: FloatArray, det_index: NDArray[np.intp],
+            rescued: BoolArray, z: FloatArray, zwh: FloatArray, zscore: FloatArray,
+            std: FloatArray, centre: FloatArray, k: int, p: FloatArray
+            ) -> tuple[BoolArray, BoolArray, BoolArray]:
+    """One frame of the life cycle of ``N`` tracks, the table updated in place.
 
     Parameters
     ----------
-    ints : (N, 8) int
-        The table's integer block with the counters already advanced (:func:`count_hits`)
-        and ``state`` still the previous frame's.
-    matched : (N,) bool
-        Got a detection this frame.
-    rescued : (N,) bool or None
-        Found by template matching this frame (never together with ``matched``).
-    fp : FrameParams
-        Life-cycle parameters in frames.
+    ints, floats : (N, 8), (N, 7)
+        The table (columns above), states of the previous frame.
+    det_index : (N,) intp
+        Each track's detection this frame (−1: none).
+    rescued : (N,) bool
+        Held by template matching (a stopped vehicle) instead.
+    z, zwh, zscore : (N, 2), (N, 2), (N,)
+        Each track's measured position, its detection's box size and calibrated score.
+    std : (N, 2)
+        Standard deviation of each track's predicted position along x and y.
+    centre : (N, 2)
+        Each track's predicted position (the end of a track that leaves the image).
+    k : int
+        The frame's index.
+    p : (N_PARAMS,) float
+        The parameters (``P_*``; a rule that is off is ``inf``, an image size unknown −1).
 
     Returns
     -------
-    state : (N,) int
-        New states: tentative tracks stay ``TENTATIVE`` until confirmed; the others are
-        ``CONFIRMED`` (detection), ``STOPPED`` (template match) or ``COASTING`` (neither).
-    delete : (N,) bool
-        Tracks that end this frame: tentative ones after more than ``tentative_max_misses``
-        consecutive misses or at the end of the confirmation window, the others after more
-        than ``max_misses`` consecutive misses.
-    confirmed_now : (N,) bool
-        Tentative tracks confirmed this frame (they get public IDs).
+    delete, confirmed_now, show : (N,) bool
+        The tracks that end now, those confirmed now (to get IDs) and those with a row.
     """
-    misses, age = ints[:, MISSES], ints[:, AGE]
-    tentative = ints[:, STATE] == TENTATIVE
-    confirmed_now = tentative & (ints[:, HITS] >= fp.confirm_hits) & (age <= fp.confirm_window)
-    still = tentative ^ confirmed_now
-    state = COASTING - matched  # CONFIRMED (= COASTING − 1) where matched
-    if rescued is not None:
-        state[rescued] = STOPPED
-    np.copyto(state, TENTATIVE, where=still)
-    delete = np.where(
-        still,
-        (misses > fp.tentative_max_misses) | (age >= fp.confirm_window),
-        misses > fp.max_misses,
-    )
-    return state, delete, confirmed_now
+    n = ints.shape[0]
+    delete = np.zeros(n, np.bool_)
+    confirmed_now = np.zeros(n, np.bool_)
+    show = np.zeros(n, np.bool_)
+    fw, fh = p[P_FRAME_W], p[P_FRAME_H]
+    for i in range(n):
+        matched = det_index[i] >= 0
+        held = matched or rescued[i]
+        ints[i, AGE] += 1
+        if matched:
+            ints[i, HITS] += 1
+            floats[i, W] += p[P_SMOOTHING] * (zwh[i, 0] - floats[i, W])
+            floats[i, H] += p[P_SMOOTHING] * (zwh[i, 1] - floats[i, H])
+            floats[i, SCORE] += zscore[i]
+        if held:
+            ints[i, MISSES] = 0
+            ints[i, PREV_K] = ints[i, LAST_K]
+            ints[i, LAST_K] = k
+            floats[i, PREV_X], floats[i, PREV_Y] = floats[i, LAST_X], floats[i, LAST_Y]
+            floats[i, LAST_X], floats[i, LAST_Y] = z[i, 0], z[i, 1]
+        else:
+            ints[i, MISSES] += 1
+        w, h = floats[i, W], floats[i, H]
+        if ints[i, STATE] == TENTATIVE:
+            if not matched:
+                delete[i] = True  # a tentative track dies at its first miss
+            elif (ints[i, HITS] >= p[P_CONFIRM_HITS]
+                  and floats[i, SCORE] >= p[P_CONFIRM_SCORE]):
+                ints[i, STATE] = CONFIRMED
+                confirmed_now[i] = True
+            show[i] = not delete[i] and (confirmed_now[i] or p[P_TENTATIVE_ROWS] > 0)
+            continue
+        if matched:
+            ints[i, STATE] = CONFIRMED
+        elif rescued[i]:
+            ints[i, STATE] = STOPPED
+        else:
+            ints[i, STATE] = COASTING
+            lost = ints[i, MISSES] > p[P_MAX_MISSES]
+            lost |= std[i, 0] > p[P_LOST_STD] * w or std[i, 1] > p[P_LOST_STD] * h
+            if fw > 0:  # its prediction left the image: the object has left the view
+                lost |= (centre[i, 0] < 0 or centre[i, 0] >= fw or centre[i, 1] < 0
+                         or centre[i, 1] >= fh)
+            delete[i] = lost
+        show[i] = not delete[i] and (
+            ints[i, STATE] != COASTING
+            or (std[i, 0] <= p[P_COAST_STD] * w and std[i, 1] <= p[P_COAST_STD] * h)
+        )
+    return delete, confirmed_now, show
+
+
+@kernel
+def births(dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8],
+           used: BoolArray, txy: FloatArray, twh: FloatArray, birth_iou: float
+           ) -> NDArray[np.intp]:
+    """The detections that start tentative tracks, in (x, y) order.
+
+    Every detection not used by a track and not dropped (``dclass > 0``) whose box overlaps
+    none of the boxes ``txy``, ``twh`` of the live tracks by an IoU of ``birth_iou`` or more
+    (``inf``: no such test). The order makes internal uids, and through them public IDs,
+    independent of the order of the rows in a detection file.
+    """
+    m, n = dxy.shape[0], txy.shape[0]
+    keep = np.zeros(m, np.bool_)
+    for j in range(m):
+        if used[j] or dclass[j] == 0:
+            continue
+        ok = True
+        if birth_iou <= 1.0:
+            ax0, ax1 = dxy[j, 0] - 0.5 * dwh[j, 0], dxy[j, 0] + 0.5 * dwh[j, 0]
+            ay0, ay1 = dxy[j, 1] - 0.5 * dwh[j, 1], dxy[j, 1] + 0.5 * dwh[j, 1]
+            area = dwh[j, 0] * dwh[j, 1]
+            for i in range(n):
+                iw = (min(ax1, txy[i, 0] + 0.5 * twh[i, 0])
+                      - max(ax0, txy[i, 0] - 0.5 * twh[i, 0]))
+                ih = (min(ay1, txy[i, 1] + 0.5 * twh[i, 1])
+                      - max(ay0, txy[i, 1] - 0.5 * twh[i, 1]))
+                if iw <= 0.0 or ih <= 0.0:
+                    continue
+                inter = iw * ih
+                if inter >= birth_iou * (area + twh[i, 0] * twh[i, 1] - inter):  # IoU ≥ t
+                    ok = False
+                    break
+        keep[j] = ok
+    idx = np.flatnonzero(keep)
+    if idx.size > 1:
+        key = np.empty(idx.size)
+        order = np.argsort(dxy[idx, 1], kind="mergesort")
+        idx = idx[order]
+        key[:] = dxy[idx, 0]
+        idx = idx[np.argsort(key, kind="mergesort")]
+    return idx
 
 
 def hand_out_ids(ints: IntArray, confirmed_now: BoolArray, next_id: int) -> int:
     """Give the tracks confirmed this frame consecutive public IDs from ``next_id``, in place.
 
     Tracks confirmed in the same frame are numbered in order of their internal uid (birth
-    order), so IDs stay consecutive and do not depend on the order of the detections. Returns
-    the next free ID.
+    order; rows are kept in uid order), so IDs do not depend on the order of the detections.
+    Returns the next free ID.
     """
-    idx = confirmed_now.nonzero()[0]  # rows are kept in uid order
+    idx = confirmed_now.nonzero()[0]
     ints[idx, TID] = np.arange(next_id, next_id + idx.size)
     return next_id + int(idx.size)
-
-
-def birth_order(xy: NDArray[np.float64]) -> IntArray:
-    """Order in which new tracks are created from unassigned detections at ``xy`` (K, 2).
-
-    Sorted by (x, y) so that internal uids, and through them public IDs, do not depend on
-    the order of the rows in the detection file.
-    """
-    return np.lexsort((xy[:, 1], xy[:, 0]))

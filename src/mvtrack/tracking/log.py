@@ -246,8 +246,7 @@ def interpolate_gaps(frames: list[TrackFrame], tail: int | None = None) -> list[
 
     (``x`` the filtered position); the rows keep their ``COASTING`` state. A run after a
     track's last anchored row (the track was deleted, or the sequence ended) is not bridged;
-    only its first ``tail`` rows are kept (all with ``tail=None``), as the online tracker's
-    ``coast_output`` does.
+    only its first ``tail`` rows are kept (all with ``tail=None``).
 
     Parameters
     ----------
@@ -295,21 +294,3 @@ def interpolate_gaps(frames: list[TrackFrame], tail: int | None = None) -> list[
     keep = np.empty(n, dtype=bool)
     keep[order] = keep_sorted
     return _split(frames, c, keep)
-
-
-def drop_short_tracks(frames: list[TrackFrame], min_rows: int) -> list[TrackFrame]:
-    """Leave out every track with fewer than ``min_rows`` output rows (offline filter).
-
-    A track confirmed on a few detections and then lost is more often clutter than a target:
-    an offline run, which sees every track whole, may drop the short ones. Rows without a
-    public ID are kept as they are.
-    """
-    if not frames or min_rows <= 1:
-        return list(frames)
-    c = _columns(frames)
-    tid = c["track_id"]
-    ids, counts = np.unique(tid[tid > 0], return_counts=True)
-    short = ids[counts < min_rows]
-    if short.size == 0:
-        return list(frames)
-    return _split(frames, c, ~np.isin(tid, short))

@@ -1,12 +1,11 @@
 """Offline tracking of a detection file: :func:`track_detections` runs a fresh
 :class:`~mvtrack.tracking.tracker.Tracker` over all frames, then writes a confirmed track
-from its first detection (backfill), interpolates the gaps it bridged and drops the short
-tracks (:mod:`mvtrack.tracking.log`).
+from its first detection (backfill) and interpolates the gaps it bridged
+(:mod:`mvtrack.tracking.log`).
 
 These revise rows after the frame that produced them (a track's first rows get its ID only once
-it is confirmed, a gap only once it is bridged or the track ends, a track is dropped only once
-it ended short), so the offline run writes its results when the whole file is tracked; it does
-not stream."""
+it is confirmed, a gap only once it is bridged or the track ends), so the offline run writes its
+results when the whole file is tracked; it does not stream."""
 
 from __future__ import annotations
 
@@ -17,8 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.tracking.config import TrackerConfig
-from mvtrack.tracking.config import _round as _round_frames
-from mvtrack.tracking.log import TrackLog, backfill, drop_short_tracks, interpolate_gaps
+from mvtrack.tracking.log import TrackLog, backfill, interpolate_gaps
 from mvtrack.tracking.tracker import RescueFn, Tracker
 from mvtrack.types import Detections, TrackFrame
 
@@ -30,6 +28,9 @@ def track_detections(
     config: TrackerConfig | None = None,
     rescue: RescueFn | None = None,
     scores: Any = None,
+    *,
+    backfill_rows: bool = True,
+    interpolate: bool = True,
 ) -> TrackLog:
     """Run a fresh :class:`Tracker` over ``frames`` (one :class:`Detections` per frame).
 
@@ -39,24 +40,21 @@ def track_detections(
     then changes nothing), and only frames with rows are kept, so a long empty stretch costs
     neither time nor memory (:func:`frames_with_detections` gives a detection file's frames
     that way). The log covers every frame from the first given to the last. With
-    ``config.backfill`` (and without ``output_tentative``) a confirmed track's rows start at
-    its first detection (:func:`mvtrack.tracking.log.backfill`); with ``config.interpolate``
-    the gaps a track bridged are written in full, interpolated
-    (:func:`mvtrack.tracking.log.interpolate_gaps`).
+    ``backfill_rows`` (and without ``config.output_tentative``) a confirmed track's rows start
+    at its first detection (:func:`mvtrack.tracking.log.backfill`); with ``interpolate`` the
+    gaps a track bridged are written in full, interpolated
+    (:func:`mvtrack.tracking.log.interpolate_gaps`), and after its last measurement the rows
+    ``config.coast_std`` shows (none by default, all for ``inf``).
 
     The ``"auto"`` score scale is calibrated on the scores seen so far, as online (the same
     thresholds mean the same in both modes); ``scores`` (for example every score of the file)
-    calibrates it on those instead (:meth:`Tracker.prime_scores`). On the MOT15 development
-    sequences the run-so-far calibration measured better offline too
-    (``docs/bench/mot15-defaults.md``).
+    calibrates it on those instead (:meth:`Tracker.prime_scores`).
     """
     config = TrackerConfig() if config is None else config
-    own = isinstance(config, TrackerConfig)
-    late = own and config.backfill and not config.output_tentative
-    fill = own and config.interpolate
+    late = backfill_rows and not config.output_tentative
     inner = config.replace(output_tentative=True) if late else config
-    if fill:  # every coasting row, to be interpolated or cut to coast_output afterwards
-        inner = inner.replace(coast_output=None)
+    if interpolate:  # every coasting row, to be interpolated or cut afterwards
+        inner = inner.replace(coast_std=float("inf"))
     tracker = Tracker(inner)
     if scores is not None:
         tracker.prime_scores(scores)
@@ -89,10 +87,8 @@ def track_detections(
         last = dets.frame
     if late:
         out = backfill(out, uids)
-    if fill:
-        out = interpolate_gaps(out, config.frames().coast_output)
-    if own and config.min_track_length is not None:  # whole tracks shorter than this go
-        out = drop_short_tracks(out, _round_frames(config.min_track_length * config.fps))
+    if interpolate:
+        out = interpolate_gaps(out, 0 if config.coast_std is None else None)
     log = TrackLog()
     if first is None:
         return log

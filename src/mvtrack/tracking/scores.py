@@ -21,11 +21,6 @@ read on a *calibrated* scale ``c ∈ [0, 1]`` given by ``TrackerConfig.score_sca
     the scores are probabilities already: ``c = clip(s, 0, 1)``.
 ``(lo, hi)``
     a fixed linear scale: ``c = clip((s − lo) / (hi − lo), 0, 1)``.
-
-:func:`duplicates` finds, within one frame, the boxes that overlap a higher-scored box by an
-IoU of at least a threshold (greedy non-maximum suppression); :func:`isolated`, the boxes that
-overlap none of some others (``TrackerConfig.low_birth_iou``: the low boxes that may start a
-tentative track).
 """
 
 from __future__ import annotations
@@ -34,8 +29,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-from mvtrack.association.gating import spatial_pairs
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -142,117 +135,3 @@ class ScoreCalibration:
         while merged.size > self.capacity:
             merged = merged[1::2]
         self._sorted, self._n = merged, 0
-
-
-def duplicates(
-    xy: FloatArray, wh: FloatArray, score: FloatArray, iou: float
-) -> BoolArray:
-    """Boxes that overlap a higher-scored box of the same frame by IoU ≥ ``iou``.
-
-    Greedy non-maximum suppression: boxes are visited by decreasing score (ties by their
-    position, left to right, then top to bottom, so the order of the rows does not matter); a
-    box is a duplicate when a kept box overlaps it by ``iou`` or more.
-
-    Parameters
-    ----------
-    xy, wh : (M, 2)
-        Box centres and sizes.
-    score : (M,)
-        Scores (any monotone scale).
-    iou : float
-        Threshold in (0, 1].
-
-    Returns
-    -------
-    (M,) bool
-        True for the suppressed boxes.
-    """
-    m = xy.shape[0]
-    dup = np.zeros(m, dtype=bool)
-    if m < 2:
-        return dup
-    over = _overlap_at_least(xy[:, None], wh[:, None], xy, wh, iou)
-    np.fill_diagonal(over, False)
-    if not over.any():
-        return dup
-    order = np.lexsort((xy[:, 1], xy[:, 0], -score))
-    rank = np.empty(m, dtype=np.intp)
-    rank[order] = np.arange(m)
-    # a loop over the boxes that overlap another one only (few), best first
-    for i in order[over.any(axis=1)[order]]:
-        if not dup[i]:
-            dup |= over[i] & (rank > rank[i])
-    return dup
-
-
-def isolated(
-    xy: FloatArray, wh: FloatArray, score: FloatArray, oxy: FloatArray, owh: FloatArray,
-    iou: float,
-) -> BoolArray:
-    """Boxes that overlap none of some others and no better-scored one of themselves.
-
-    A box is isolated when its IoU with every other box ``(oxy, owh)`` is below ``iou`` and it
-    is not a :func:`duplicates` of a higher-scored box among the boxes so isolated. The test
-    ``IoU ≥ t`` is ``|a ∩ b| (1 + t) ≥ t (|a| + |b|)``, without a division.
-
-    Parameters
-    ----------
-    xy, wh : (M, 2)
-        Box centres and sizes.
-    score : (M,)
-        Their scores (any monotone scale).
-    oxy, owh : (K, 2)
-        Centres and sizes of the other boxes (live tracks' predicted boxes, high detections).
-    iou : float
-        Threshold in (0, 1].
-
-    Returns
-    -------
-    (M,) bool
-    """
-    keep = ~_overlaps_any(xy, wh, oxy, owh, iou) if oxy.shape[0] else np.ones(len(xy), bool)
-    idx = keep.nonzero()[0]
-    if idx.size > 1:  # of two overlapping candidates, the better-scored one
-        keep[idx[duplicates(xy[idx], wh[idx], score[idx], iou)]] = False
-    return keep
-
-
-#: pairs of boxes tested densely by :func:`isolated`; above, only those whose centres are
-#: close enough to overlap (a spatial grid)
-DENSE_OVERLAP = 6_400
-
-
-def _overlap_at_least(
-    axy: FloatArray, awh: FloatArray, bxy: FloatArray, bwh: FloatArray, iou: float
-) -> BoolArray:
-    """``IoU(a, b) ≥ iou`` for boxes given by centres and sizes (broadcast against each other:
-    a matrix, or aligned pairs), as ``|a ∩ b| (1 + t) ≥ t (|a| + |b|)`` with ``|a ∩ b| > 0``."""
-    ahalf, bhalf = awh / 2, bwh / 2
-    side = np.minimum(axy + ahalf, bxy + bhalf)
-    side -= np.maximum(axy - ahalf, bxy - bhalf)
-    np.maximum(side, 0.0, out=side)
-    inter = side[..., 0] * side[..., 1]
-    areas = awh[..., 0] * awh[..., 1] + bwh[..., 0] * bwh[..., 1]
-    return (inter * (1.0 + iou) >= iou * areas) & (inter > 0)
-
-
-def _overlaps_any(
-    xy: FloatArray, wh: FloatArray, oxy: FloatArray, owh: FloatArray, iou: float
-) -> BoolArray:
-    """Whether each box overlaps some box ``(oxy, owh)`` by IoU ≥ ``iou``
-    (:func:`_overlap_at_least`): every pair when there are few, else the pairs whose centres
-    lie within the sum of the two half-diagonals (a spatial grid)."""
-    m, k = xy.shape[0], oxy.shape[0]
-    if m * k <= DENSE_OVERLAP:  # every pair, as an (M, K) matrix
-        return _overlap_at_least(xy[:, None], wh[:, None], oxy, owh, iou).any(axis=1)
-    half_diag = 0.5 * np.hypot(wh[:, 0], wh[:, 1])
-    reach = half_diag + 0.5 * float(np.hypot(owh[:, 0], owh[:, 1]).max())
-    a, b = spatial_pairs(xy, oxy, reach)
-    # boxes apart along x cannot overlap: one cheap test drops most candidate pairs
-    near = np.abs(xy[:, 0].take(a) - oxy[:, 0].take(b)) * 2.0 < (
-        wh[:, 0].take(a) + owh[:, 0].take(b))
-    a, b = a.compress(near), b.compress(near)
-    hit = _overlap_at_least(xy.take(a, 0), wh.take(a, 0), oxy.take(b, 0), owh.take(b, 0), iou)
-    out = np.zeros(m, dtype=bool)
-    out[a.compress(hit)] = True
-    return out

@@ -7,7 +7,6 @@ The predictor state is kept beside the table, row-aligned with it; :func:`take_s
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -15,20 +14,33 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.filters.cv import CVState
-from mvtrack.types import Detections, concat_rows, take_rows
+from mvtrack.tracking.lifecycle import (
+    AGE,
+    HITS,
+    LAST_K,
+    LAST_X,
+    LAST_Y,
+    MISSES,
+    N_FLOAT,
+    N_INT,
+    PREV_K,
+    PREV_X,
+    PREV_Y,
+    SCORE,
+    STATE,
+    TID,
+    UID,
+    H,
+    W,
+)
+from mvtrack.types import concat_rows, take_rows
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
-#: integer columns of :class:`TrackTable`
-UID, TID, STATE, HITS, MISSES, AGE, LAST_K, PREV_K = range(8)
-N_INT = 8
-#: float columns: last measurement (x, y), the one before (x, y), box (w, h)
-LAST_XY, PREV_XY, WH = slice(0, 2), slice(2, 4), slice(4, 6)
-N_FLOAT = 6
-#: the float columns of a new track from its detection's ``x, y, w, h``
-BIRTH_COLS = np.array([0, 1, 0, 1, 2, 3])
+#: the columns are the life cycle's (its kernels read them): :mod:`mvtrack.tracking.lifecycle`
+LAST_XY, PREV_XY, WH = slice(LAST_X, LAST_Y + 1), slice(PREV_X, PREV_Y + 1), slice(W, H + 1)
 
 
 @dataclass(frozen=True)
@@ -43,8 +55,9 @@ class TrackTable:
     ----------
     ints : (N, 8) int64
         ``uid, track_id, state, hits, misses, age, last_k, prev_k``.
-    floats : (N, 6) float64
-        ``last_xy (2), prev_xy (2), wh (2)``.
+    floats : (N, 7) float64
+        ``last_xy (2), prev_xy (2), wh (2), score`` (the sum of the calibrated scores of the
+        track's detections).
     """
 
     ints: IntArray
@@ -119,6 +132,11 @@ class TrackTable:
         """(N, 2) box size, exponentially smoothed over the associated detections."""
         return self.floats[:, WH]
 
+    @property
+    def score(self) -> FloatArray:
+        """(N,) sum of the calibrated scores of the track's detections."""
+        return self.floats[:, SCORE]
+
 
 def take_state(state: Any, idx: NDArray[np.intp] | slice) -> Any:
     """Rows ``idx`` of the predictor's batch ``state`` (views for a slice of a closed-form
@@ -128,45 +146,6 @@ def take_state(state: Any, idx: NDArray[np.intp] | slice) -> Any:
             return CVState(state.x[idx], state.P[idx])
         return CVState(state.x.take(idx, 0), state.P.take(idx, 0))
     return take_rows(state, idx)
-
-
-def kept_rows(delete: BoolArray) -> NDArray[np.intp] | slice:
-    """The rows not in ``delete``: a slice when they are the first ones (only the last rows
-    end, as when last frame's false alarms end), else their indices."""
-    keep = (~delete).nonzero()[0]
-    if keep.size == 0 or keep[-1] == keep.size - 1:
-        return slice(0, keep.size)
-    return keep
-
-
-def uid_ramp(b: int) -> IntArray:
-    """(b, 8) int64: 0, 1, ..., b − 1 in the uid column, 0 elsewhere (added to a birth row)."""
-    ramp = np.zeros((b, N_INT), dtype=np.int64)
-    ramp[:, UID] = np.arange(b)
-    return ramp
-
-
-def detection_rows(dets: Detections) -> FloatArray:
-    """(M + 1, 4): each detection's ``x, y, w, h``, then a row of NaN (the one index −1 takes,
-    so that one ``take`` by a track's detection index also fills the tracks without one)."""
-    m = dets.xy.shape[0]
-    rows = np.empty((m + 1, 4))
-    rows[:m, :2] = dets.xy
-    rows[:m, 2:] = dets.wh
-    rows[m] = np.nan
-    return rows
-
-
-def put_state(state: Any, idx: NDArray[np.intp], new: Any) -> Any:
-    """A copy of the batch ``state`` with rows ``idx`` replaced by the rows of ``new``."""
-    changes = {}
-    for f in dataclasses.fields(state):
-        a = getattr(state, f.name)
-        if isinstance(a, np.ndarray) and a.ndim >= 1:
-            a = a.copy()
-            a[idx] = getattr(new, f.name)
-            changes[f.name] = a
-    return dataclasses.replace(state, **changes)
 
 
 def concat_state(a: Any, b: Any) -> Any:

@@ -42,7 +42,9 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     default (a gate is in the distance's units: px² for ``euclidean``, χ² for the others);
     naming the preset's own distance changes nothing (:func:`mvtrack.tracking.preset`).
     TOML has no null, so the string ``"none"`` (any case) stands for ``None`` (e.g.
-    ``second_gate = "none"`` turns the second stage off).
+    ``birth_iou = "none"`` lets every detection left over start a track). ``frame_size``
+    (the image's, :func:`~mvtrack.video.resolve_settings`) is the tracker's, not the
+    configuration's (:func:`build_tracker`).
 
     Raises
     ------
@@ -54,6 +56,7 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     params = {k: None if isinstance(v, str) and v.lower() == "none" else v
               for k, v in settings.tracker.items()}
     name = params.pop("preset", "default")
+    params.pop("frame_size", None)
     if name not in PRESETS:
         raise InputError(f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}")
     known = {f.name for f in dataclasses.fields(TrackerConfig)}
@@ -73,8 +76,9 @@ def build_tracker(settings: RunSettings, fps: float) -> Any:
     from mvtrack.tracking import Tracker
 
     config = build_tracker_config(settings, fps)
+    size = settings.tracker.get("frame_size")
     try:
-        return Tracker(config)
+        return Tracker(config, frame_size=None if size is None else tuple(size))
     except (TypeError, ValueError) as exc:
         raise InputError(f"tracker settings: {exc}") from None
 

@@ -147,8 +147,7 @@ def track_to_folder(
     label = f"{config.predictor} | {config.distance} | {config.assign}"
     stream = None
     if flush is not None:  # both files exist (empty) before the first frame
-        frames_of = getattr(config, "frames", None)
-        gap = frames_of().max_misses if frames_of is not None else None
+        gap = getattr(config, "max_misses", None)
         if gap is not None and relinker is not None:  # a relinked ID pauses up to the window
             gap += relinker.window
         stream = StreamingOutput(out, flush, gap=gap, fps=fps)
@@ -195,8 +194,7 @@ def track_to_folder(
             if settings.gates:  # the confirmed tracks' gates for the next frame
                 g = tracker.gates()
                 g = g.take(g.track_id > 0)
-                gates = {"gate_center": g.center, "gate_cov": g.shape, "gate_r2": g.r2,
-                         "outer_cov": g.second_shape, "outer_r2": g.second_r2}
+                gates = {"gate_center": g.center, "gate_cov": g.shape, "gate_r2": g.r2}
             text = [f"frame {k}  tracks {len(tracks)}", label]
             img = annotate_frame(image, tracks, trails=trails, text=text, **gates)
             if live is not None:
@@ -261,7 +259,7 @@ def track_to_folder(
         "interrupted": result.interrupted,
         "error": result.error,
         "settings": settings.as_dict(),
-        "tracker": _config_dict(config),
+        "tracker": _config_dict(config, getattr(tracker, "frame_size", None)),
         "files": {k: v.name for k, v in paths.items()},
     }
     if stream is not None:
@@ -321,15 +319,12 @@ def write_tables(
     return paths
 
 
-def _config_dict(config: Any) -> dict[str, Any]:
-    from mvtrack.tracking.config import Frames
-
+def _config_dict(config: Any, frame_size: Any = None) -> dict[str, Any]:
     out = {}
     for f in dataclasses.fields(config):
         value = getattr(config, f.name)
-        if isinstance(value, Frames):  # "3 frames", not a number of seconds
-            value = str(value)
         out[f.name] = dict(value) if isinstance(value, Mapping) else value
+    out["frame_size"] = None if frame_size is None else list(frame_size)  # from the video
     return out
 
 

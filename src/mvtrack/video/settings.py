@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
 
 from mvtrack.config import RunSettings
 
@@ -32,19 +31,10 @@ def resolve_settings(
       The closing is not scaled with the image: a larger one merges people walking side by
       side in 768×576 video. SPEC §1.1 [R] (opening only, area ≥ 20 px) is
       ``close_size = 0, min_area = 20``;
-    - the default tracker preset: measurement noise ``measurement_std = 2 s`` px, i.e.
-      ``r = 4 s²`` px² (SPEC §2.1 [R] gives 4 px² at 320×240, the preset's own value there;
-      blob centroids jitter with the blob's size).
-
-    - the default preset's pixel distances (its Euclidean gate, ``second_gate``,
-      ``recover_margin``) scaled by ``s`` (the gate, in px², by ``s²``). ``recover_speed``
-      stays: scaled, it let tracks hop 70 px per frame on 768×576 video at 10 fps. Its
-      ``size_ref`` is scaled by ``s`` too (boxes larger than that stretch the gates).
-
-    - no size gate (``size_gate = None``): blobs merge and split, so the size of a blob's box
-      says little about which object it is;
-
-    - the image's size (``frame_size``): a track that coasts out of the image ends there.
+    - the tracker (any preset): the image's size (``frame_size``), so that a track whose
+      prediction leaves the image ends there. It is the only tracker value a video derives:
+      the tracker's noise and gates are in box sizes, the same for any image
+      (:mod:`mvtrack.tracking.config`), and ``summary.json`` prints it with the settings.
 
     - for the disturbance map (not in paper 1): its ghosts tested every 5 frames
       (``ghost_every = 5``), so a vehicle that stood keeps its track when it leaves
@@ -78,37 +68,6 @@ def resolve_settings(
             det["track_split"] = True
             det.setdefault("track_merge", False)
     tracker = dict(settings.tracker)
-    if tracker.get("preset", "default") == "default":
-        # blobs merge and split (two vehicles in one blob, a person in two): a blob's box
-        # size is no evidence of identity, unlike a detector's box
-        tracker.setdefault("size_gate", None)
-        # a track that coasts out of the image ends there (TrackerConfig.frame_size)
-        tracker.setdefault("frame_size", [float(w), float(h)])
-        # the video loop relinks with appearance too (mvtrack.video.relink)
-        tracker.setdefault("relink_window", None)
-        up = max(s2, 1.0)  # smaller images keep the 320×240 values
-        if not {"predictor_params", "measurement_std"} & set(tracker):
-            tracker["measurement_std"] = round(2.0 * up**0.5, 3)  # r = 4 s² px²
-        tracker.update(_scaled_pixel_fields(tracker, up))
+    tracker.setdefault("frame_size", [float(w), float(h)])  # Tracker(frame_size=...)
     return dataclasses.replace(settings, detector_params=det, tracker=tracker)
 
-
-def _scaled_pixel_fields(tracker: dict[str, Any], s2: float) -> dict[str, Any]:
-    """Pixel-valued defaults of ``TrackerConfig`` scaled to an image ``s²`` times 320×240."""
-    from mvtrack.association import resolve_gate
-    from mvtrack.tracking import TrackerConfig
-
-    defaults = {f.name: f.default for f in dataclasses.fields(TrackerConfig)}
-    # size_ref (the box size above which the gates stretch with the box) scales too, so a
-    # blob s times the reference box is treated as the reference box at 320×240
-    power = {"second_gate": 0.5, "recover_margin": 0.5, "size_ref": 0.5}
-    if tracker.get("distance", defaults.get("distance")) == "euclidean":
-        power["gate"] = 1.0  # px², scales with the area
-        defaults["gate"] = resolve_gate("euclidean", defaults["gate"])
-    out = {}
-    for name, p in power.items():
-        value = defaults.get(name)
-        if name in tracker or not isinstance(value, (int, float)) or s2 == 1.0:
-            continue
-        out[name] = round(float(value) * s2**p, 3)
-    return out

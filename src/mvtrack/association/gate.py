@@ -1,0 +1,237 @@
+"""The gate: which detections a track may take, at what cost, and the region to draw.
+
+One :class:`Gate` per frame holds, for each of the ``N`` predicted tracks, a centre ``c`` and
+a 2×2 covariance ``C``: a detection at ``z`` with box ``wh_d`` is a candidate of track ``i``
+when
+
+.. math::
+    (z - c_i)^T C_i^{-1} (z - c_i) + w_s \\,\\lVert \\ln(wh_d / wh_i) \\rVert^2 \\le g
+
+(:func:`mvtrack.association.assign.quadratic_pairs` finds the pairs, the same value is their
+cost). Every distance of papers 1 and 2 but two is such a quadratic form about the
+prediction (:func:`shapes`):
+
+- ``mahalanobis`` (the default): ``C = S = P̄ + R``, the filter's innovation covariance, so
+  the gate opens as the prediction grows uncertain (a lost track, a new track whose velocity is
+  not known yet) and closes as the filter settles; ``g`` a χ² quantile (9.21: 99 %);
+- ``euclidean`` (eq. (8) of paper 2, paper 1's circular mask): ``C = I``, ``g`` in px²;
+- ``uncoupled`` (eq. (9) of paper 2): ``C = diag(P̄x, P̄y)``;
+- ``coupled`` (eq. (10) of paper 2 corrected, SPEC §2.3): ``C = R_θ diag(ρ² σ², σ²) R_θᵀ``,
+  σ² = (P̄x + P̄y)/2, θ the direction of the predicted velocity (eq. (9)'s ellipse where the
+  speed is below ``min_speed``).
+
+``iou`` (``1 − IoU`` of the predicted and the detected box) and ``coupled-literal`` (eq. (10)
+as printed, not a region about the prediction, E2.7) are given to the assignment as a cost
+matrix (:meth:`Gate.matrix`) and are drawn as nothing.
+
+The size term (``w_s = 1 / σ_s²``, σ_s the standard deviation of the log ratio of a track's
+box sizes from frame to frame) ranks and gates a pair by its box as well as its position: a
+box twice as tall is another object, nearer or farther. ``size_log`` is an optional hard
+size gate on top (heights within ``e^size_log``, widths within its square).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mvtrack.association.assign import matrix_pairs, quadratic_pairs
+from mvtrack.association.distances import get_distance
+from mvtrack.association.view import TrackView
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+__all__ = ["QUADRATIC", "SHAPE_PARAMS", "Gate", "GateRegions", "shapes", "warmup_centre"]
+
+#: the distances whose gate is a quadratic form about the prediction
+QUADRATIC = ("mahalanobis", "euclidean", "uncoupled", "coupled")
+#: the distance parameters that change the shape of a gate (see :func:`shapes`)
+SHAPE_PARAMS = ("rho", "min_speed", "use_innovation")
+
+
+def shapes(distance: str, cov: FloatArray, S: FloatArray, velocity: FloatArray, *,
+           rho: float = 2.0, min_speed: float = 0.5, use_innovation: bool | None = None
+           ) -> FloatArray:
+    """The gate covariance ``C`` (K, 2, 2) of each track for a quadratic ``distance``.
+
+    ``cov`` and ``S`` are the predicted position covariance P̄ and the innovation covariance
+    (K, 2, 2), ``velocity`` the predicted velocity (K, 2) px/frame; ``rho``, ``min_speed`` and
+    ``use_innovation`` as in :mod:`mvtrack.association.distances` (``use_innovation``
+    defaults to True for ``mahalanobis`` only). Other distances give NaN.
+    """
+    k = cov.shape[0]
+    if use_innovation is None:
+        use_innovation = distance == "mahalanobis"
+    base = S if use_innovation else cov
+    var = np.stack([base[:, 0, 0], base[:, 1, 1]], axis=1)
+    diag = np.zeros((k, 2, 2))
+    diag[:, 0, 0], diag[:, 1, 1] = var[:, 0], var[:, 1]
+    if distance == "euclidean":
+        out = np.zeros((k, 2, 2))
+        out[:, 0, 0] = out[:, 1, 1] = 1.0  # eq. (8) of paper 2
+        return out
+    if distance == "uncoupled":
+        return diag  # eq. (9) of paper 2
+    if distance == "coupled":
+        if rho <= 0:
+            raise ValueError(f"coupled distance: rho must be positive, got {rho}")
+        s = np.hypot(velocity[:, 0], velocity[:, 1])
+        moving = s >= min_speed
+        s_safe = np.where(moving, s, 1.0)
+        c, sn = velocity[:, 0] / s_safe, velocity[:, 1] / s_safe
+        rot = np.stack([np.stack([c, -sn], 1), np.stack([sn, c], 1)], 1)  # columns: ∥, ⊥
+        sig2 = var.mean(axis=1)  # σ⊥² = (P̄x + P̄y)/2, SPEC §2.3 [R]
+        lam = np.zeros((k, 2, 2))
+        lam[:, 0, 0], lam[:, 1, 1] = rho**2 * sig2, sig2
+        rotated = rot @ lam @ rot.transpose(0, 2, 1)  # SPEC §2.3: R_θ diag(σ∥², σ⊥²) R_θᵀ
+        return np.where(moving[:, None, None], rotated, diag)
+    if distance == "mahalanobis":
+        return np.array(base, dtype=np.float64)
+    return np.full((k, 2, 2), np.nan)
+
+
+def warmup_centre(
+    pxy: FloatArray, hits: NDArray[np.int64], last_xy: FloatArray, prev_xy: FloatArray,
+    last_k: NDArray[np.int64], prev_k: NDArray[np.int64], k: int, warmup_hits: int,
+) -> FloatArray:
+    """Paper 1's warm-up gate centre (SPEC §1.1 [R]) instead of the prediction ``pxy``.
+
+    Until a track has ``warmup_hits`` (``2M = 6``) associations the gate centre is the linear
+    extrapolation of its last two measurements, ``2 y_k − y_{k−1}`` for consecutive frames
+    (scaled by the elapsed frames after misses), and ``y_k`` after a single association.
+    """
+    warm = hits < warmup_hits
+    if not np.count_nonzero(warm):
+        return pxy
+    span = np.maximum(last_k - prev_k, 1)[:, None]
+    gap = (k - last_k)[:, None]
+    centre = last_xy + (last_xy - prev_xy) * (gap / span)  # 2y_k − y_{k−1}, SPEC §1.1 [R]
+    return np.where(warm[:, None], centre, pxy)
+
+
+@dataclass(frozen=True)
+class GateRegions:
+    """The gates of ``K`` tracks as regions to draw: ``(z − c)ᵀ C⁻¹ (z − c) ≤ r²``.
+
+    Attributes
+    ----------
+    uid, track_id : (K,) int64
+        Internal identity and public ID (−1 while tentative) of each track.
+    center : (K, 2)
+        Gate centres ``c``.
+    shape : (K, 2, 2)
+        Covariances ``C`` (NaN where the gate is not an ellipse about the centre).
+    r2 : float
+        The gate on the squared distance, the same for every track.
+    """
+
+    uid: IntArray
+    track_id: IntArray
+    center: FloatArray
+    shape: FloatArray
+    r2: float
+
+    def __len__(self) -> int:
+        return int(self.center.shape[0])
+
+    def take(self, idx: NDArray[np.intp] | NDArray[np.bool_]) -> GateRegions:
+        """The gates of rows ``idx`` (indices or a mask)."""
+        return GateRegions(self.uid[idx], self.track_id[idx], self.center[idx],
+                           self.shape[idx], self.r2)
+
+
+@dataclass(frozen=True)
+class Gate:
+    """The gates of ``N`` predicted tracks for one frame.
+
+    Attributes
+    ----------
+    distance : str
+        The distance's name.
+    view : TrackView
+        The predicted tracks (centres, P̄, S, velocity, box sizes).
+    threshold : float
+        ``g``: pairs with a value ``<= g`` are candidates.
+    cov : (N, 3) float64
+        ``C`` as ``(c_xx, c_xy, c_yy)`` for the quadratic distances (NaN otherwise).
+    size_weight : float
+        ``w_s`` of the size term (0: none).
+    size_log : float
+        The hard size gate as the log of its factor (0: none).
+    params : dict
+        The distance's own parameters.
+    """
+
+    distance: str
+    view: TrackView
+    threshold: float
+    cov: FloatArray
+    size_weight: float = 0.0
+    size_log: float = 0.0
+    params: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def build(cls, distance: str, view: TrackView, threshold: float, *,
+              size_weight: float = 0.0, size_log: float = 0.0, **params: Any) -> Gate:
+        """The gate of ``distance`` for the tracks of ``view``."""
+        shape_params = {p: v for p, v in params.items() if p in SHAPE_PARAMS}
+        C = shapes(distance, view.cov, view.S, view.velocity, **shape_params)
+        cov = np.stack([C[:, 0, 0], 0.5 * (C[:, 0, 1] + C[:, 1, 0]), C[:, 1, 1]], axis=1)
+        return cls(distance, view, float(threshold), np.ascontiguousarray(cov),
+                   float(size_weight), float(size_log), dict(params))
+
+    def __len__(self) -> int:
+        return len(self.view)
+
+    @property
+    def quadratic(self) -> bool:
+        """Whether the gate is a quadratic form about the prediction."""
+        return self.distance in QUADRATIC
+
+    def matrix(self, dxy: FloatArray, dwh: FloatArray) -> FloatArray:
+        """The gate's value of every track and detection (N, M), without the size gate.
+
+        The assignment computes the quadratic gates itself; this is the cost matrix of the
+        others and the reference the tests check the kernel against.
+        """
+        n, m = len(self.view), dxy.shape[0]
+        ti, dj = np.divmod(np.arange(n * m), max(m, 1))
+        if self.quadratic:
+            d = dxy[dj] - self.view.xy[ti]
+            c = self.cov[ti]
+            det = c[:, 0] * c[:, 2] - c[:, 1] ** 2
+            value = (c[:, 2] * d[:, 0] ** 2 - 2 * c[:, 1] * d[:, 0] * d[:, 1]
+                     + c[:, 0] * d[:, 1] ** 2) / det
+        else:
+            dist = get_distance(self.distance)
+            value = dist.pairs(self.view, dxy, dwh, ti, dj, **self.params)
+        if self.size_weight:
+            lr = np.log(dwh[dj] / self.view.wh[ti])
+            value = value + self.size_weight * (lr**2).sum(axis=1)
+        return np.asarray(value, dtype=np.float64).reshape(n, m)
+
+    def pairs(self, dxy: FloatArray, dwh: FloatArray) -> tuple[NDArray[np.intp],
+                                                             NDArray[np.intp], FloatArray]:
+        """The candidate pairs ``(ti, dj, value)`` of the tracks and detections at ``dxy``
+        with boxes ``dwh``, sorted by track then detection (the tracker's own search,
+        :mod:`mvtrack.association.assign`)."""
+        n, m = len(self), dxy.shape[0]
+        tsel, dsel = np.ones(n, bool), np.ones(m, bool)
+        dxy = np.ascontiguousarray(dxy, dtype=np.float64)
+        dwh = np.ascontiguousarray(dwh, dtype=np.float64)
+        if self.quadratic:
+            return quadratic_pairs(self.view.xy, self.cov, self.view.wh, tsel, dxy, dwh, dsel,
+                                   self.threshold, self.size_weight, self.size_log)
+        return matrix_pairs(self.matrix(dxy, dwh), tsel, dsel, self.threshold)
+
+    def regions(self, uid: IntArray, track_id: IntArray) -> GateRegions:
+        """The regions to draw (the position part: the size term only narrows them)."""
+        c = self.cov
+        shape = np.stack([np.stack([c[:, 0], c[:, 1]], -1), np.stack([c[:, 1], c[:, 2]], -1)],
+                         -2)
+        return GateRegions(np.asarray(uid).copy(), np.asarray(track_id).copy(),
+                           np.array(self.view.xy), shape, self.threshold)
