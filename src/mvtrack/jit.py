@@ -1,48 +1,94 @@
 """Compiled kernels written once: :func:`kernel` compiles a plain function with numba.
 
-The per-frame kernels of the tracker (the closed-form filter of :mod:`mvtrack.filters.cv`,
-the staged assignment of :mod:`mvtrack.association.assign`, the life cycle of
-:mod:`mvtrack.tracking.lifecycle`) are plain Python functions over NumPy arrays, in the
-subset of Python that numba compiles. :func:`kernel` compiles each one (cached on disk, so a
-process after the first loads it in milliseconds) and keeps the plain function as
-``fn.py_func``: the fallback where numba is not installed, and the oracle the tests compare
-the compiled code with. There is no second implementation to keep equal.
+The per-frame kernels of the tracker (the filters of :mod:`mvtrack.filters.cv` and
+:mod:`mvtrack.filters.imm`, the assignment of :mod:`mvtrack.association.assign`, the life
+cycle of :mod:`mvtrack.tracking.lifecycle` and the frame step that composes them,
+:mod:`mvtrack.tracking.step`) are plain Python functions over NumPy arrays, in the subset of
+Python that numba compiles. :func:`kernel` compiles each one and keeps the plain function as
+``fn.py_func``: the fallback where numba is not installed (or ``MVTRACK_NO_JIT=1``), and the
+oracle the tests compare the compiled code with. There is no second implementation to keep
+equal.
 
-numba's on-disk cache is keyed on the source file of each kernel. A kernel therefore reads
-only its own module's globals and calls only kernels of its own module; kernels of different
-modules meet in Python (:meth:`mvtrack.tracking.Tracker.step`), so editing any file
-invalidates exactly the cached kernels it holds and nothing needs deleting by hand.
+The compiled code is cached on disk, so a process after the first loads it in milliseconds.
+numba keys its cache on each kernel's own source file only, while a kernel may call kernels of
+other modules; so the cache lives in a folder named after a hash of every kernel module
+(:data:`KERNEL_MODULES`): editing any of them moves the cache to a new folder, and nothing
+needs deleting by hand. ``NUMBA_CACHE_DIR``, when set, is used as it is.
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any, TypeVar
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 try:
     import numba
+    from numba.core import config as _numba_config
 except ImportError:  # pragma: no cover - exercised only where numba is missing
     numba = None
 
 #: whether numba compiles the kernels (``MVTRACK_NO_JIT=1`` runs the plain functions)
 COMPILED = numba is not None and os.environ.get("MVTRACK_NO_JIT", "") in ("", "0")
 
-__all__ = ["COMPILED", "kernel", "python_call"]
+#: the modules that define kernels (paths inside the package), hashed into the cache folder
+KERNEL_MODULES = (
+    "jit.py",
+    "filters/cv.py",
+    "filters/imm.py",
+    "association/assign.py",
+    "tracking/lifecycle.py",
+    "tracking/step.py",
+)
+
+__all__ = ["COMPILED", "KERNEL_MODULES", "cache_dir", "kernel", "python_call"]
+
+_PACKAGE = Path(__file__).resolve().parent
+_cache: str | None = None
+
+
+def cache_dir() -> str | None:
+    """The folder of the compiled kernels: ``$NUMBA_CACHE_DIR`` if set, else
+    ``$XDG_CACHE_HOME/mvtrack/numba-<hash of the kernel modules>`` (``~/.cache`` by default);
+    None when it cannot be created (the kernels are then compiled in every process)."""
+    global _cache
+    if _cache is None:
+        digest = hashlib.sha1()
+        for name in KERNEL_MODULES:
+            digest.update((_PACKAGE / name).read_bytes())
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "mvtrack"
+        path = base / f"numba-{digest.hexdigest()[:16]}"
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            _cache = ""
+        else:
+            _cache = str(path)
+    return _cache or None
 
 
 def kernel(fn: F) -> F:
-    """``fn`` compiled in nopython mode with an on-disk cache; ``fn`` itself without numba.
-
-    Either way the result has ``py_func``, the plain function.
-    """
+    """``fn`` compiled in nopython mode with an on-disk cache (:func:`cache_dir`); ``fn``
+    itself without numba. Either way the result has ``py_func``, the plain function."""
     if not COMPILED:
         fn.py_func = fn  # type: ignore[attr-defined]
         return fn
-    return numba.njit(cache=True)(fn)  # type: ignore[no-any-return]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return numba.njit(cache=True)(fn)  # type: ignore[no-any-return]
+    folder = cache_dir()
+    if folder is None:
+        return numba.njit(fn)  # type: ignore[no-any-return]
+    saved = _numba_config.CACHE_DIR
+    _numba_config.CACHE_DIR = folder  # read once, when the cache of fn is set up
+    try:
+        return numba.njit(cache=True)(fn)  # type: ignore[no-any-return]
+    finally:
+        _numba_config.CACHE_DIR = saved
 
 
 @contextlib.contextmanager

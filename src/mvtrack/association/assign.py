@@ -18,7 +18,8 @@ The tracker's association of one frame is :func:`associate`, a compiled kernel
      ``Σ cost + u`` per pair of unmatched track and detection, ``u`` the gate (a gated pair
      is always worth matching on its own; a conflict is settled by the least total cost),
      solved per connected component of the gate graph — directly where a component is one
-     pair, by SciPy's ``linear_sum_assignment`` where it is a conflict.
+     pair, by enumeration where it is a small conflict, by SciPy's
+     ``linear_sum_assignment`` where it is a larger one.
 
 Ties are broken by (cost, track row, detection row). :func:`assign` is the same rules on
 any list of pairs (the crossing experiment, :mod:`mvtrack.association.explain`).
@@ -50,6 +51,9 @@ _NEAREST, _GREEDY, _OPTIMAL = 0, 1, 2
 DROPPED, LOW, HIGH = 0, 1, 2
 #: below this many track × detection tests a frame is gated pair by pair, above through a grid
 _DENSE_TESTS = 4096
+#: conflicts of at most this many tracks and detections are solved by enumeration, larger ones
+#: by SciPy (a call back from compiled code costs more than enumerating a small block)
+_SMALL = 4
 
 
 # ------------------------------------------------------------------------------ candidate pairs
@@ -199,6 +203,46 @@ def _lsa(block: FloatArray) -> tuple[IntArray, IntArray]:
 
 
 @kernel
+def _small_block(block: FloatArray, unmatched: float) -> tuple[IntArray, IntArray]:
+    """The exact assignment of a block of at most :data:`_SMALL` rows by enumeration: each row
+    takes a distinct column or none (at cost ``unmatched``); the least total wins, the first
+    found among equals (rows in order, columns in order, none last)."""
+    r, c = block.shape
+    choice = np.zeros(r, np.intp)  # an odometer over the columns 0..c (c: none)
+    best = np.zeros(r, np.intp)
+    best_cost = math.inf
+    used = np.zeros(c + 1, np.intp)
+    while True:
+        total = 0.0
+        ok = True
+        used[:] = 0
+        for i in range(r):
+            j = choice[i]
+            if j < c:
+                if used[j]:
+                    ok = False
+                    break
+                used[j] = 1
+                total += block[i, j]
+            else:
+                total += unmatched
+        if ok and total < best_cost:
+            best_cost = total
+            best[:] = choice
+        i = r - 1
+        while i >= 0:
+            choice[i] += 1
+            if choice[i] <= c:
+                break
+            choice[i] = 0
+            i -= 1
+        if i < 0:
+            break
+    keep = best < c
+    return np.flatnonzero(keep), best[keep]
+
+
+@kernel
 def _find(parent: IntArray, a: int) -> int:
     while parent[a] != a:
         parent[a] = parent[parent[a]]
@@ -263,7 +307,10 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
                 a = np.searchsorted(rows, ti[q])
                 b = np.searchsorted(cols, dj[q])
                 block[a, b] = cost[q]
-            ra, ca = _lsa(block)
+            if rows.size <= _SMALL and cols.size <= _SMALL:
+                ra, ca = _small_block(block, unmatched)
+            else:
+                ra, ca = _lsa(block)
             for e in range(ra.size):
                 if block[ra[e], ca[e]] < unmatched:
                     det_index[rows[ra[e]]] = cols[ca[e]]

@@ -129,6 +129,27 @@ def imm_update(x: FloatArray, P: FloatArray, mu: FloatArray, z: FloatArray,
 
 
 @kernel
+def imm_init(xy: FloatArray, r: FloatArray, vel_var: FloatArray, pi: FloatArray
+             ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """New tracks at ``xy`` (K, 2) with zero velocity: both models start at ``P₀ = diag(r,
+    vel_var)`` per axis (``r``, ``vel_var``: (K, 2)), the modes at their long-run shares
+    under ``pi``."""
+    k = xy.shape[0]
+    x = np.zeros((k, 2, 4))
+    P = np.zeros((k, 2, 2, 3))
+    mu = np.empty((k, 2))
+    stationary = pi[1, 0] / (pi[0, 1] + pi[1, 0])
+    for t in range(k):
+        for j in range(2):
+            x[t, j, 0], x[t, j, 1] = xy[t, 0], xy[t, 1]
+            for ax in range(2):
+                P[t, j, ax, 0] = r[t, ax]
+                P[t, j, ax, 2] = vel_var[t, ax]
+        mu[t, 0], mu[t, 1] = stationary, 1.0 - stationary
+    return x, P, mu
+
+
+@kernel
 def imm_combine(x: FloatArray, P: FloatArray, mu: FloatArray) -> tuple[FloatArray, FloatArray]:
     """The moment-matched mixture: ``x`` (N, 4) and per-axis ``(a, b, c)`` (N, 2, 3)."""
     n = x.shape[0]
@@ -187,18 +208,10 @@ class KalmanIMMPredictor:
     def init(self, xy: FloatArray, r: FloatArray | None = None,
              vel_var: FloatArray | None = None) -> IMMState:
         """New tracks at ``xy`` (K, 2), zero velocity, both models alike, mostly steady."""
-        xy = check_xy("xy", xy)
+        xy = np.ascontiguousarray(check_xy("xy", xy))
         k = xy.shape[0]
-        x = np.zeros((k, 2, 4))
-        x[:, :, :2] = xy[:, None]
-        P = np.zeros((k, 2, 2, 3))
-        P[:, :, :, 0] = self._noise(r, self.r, k)[:, None]
-        P[:, :, :, 2] = self._noise(vel_var, self.vel_var, k)[:, None]
-        pi = self.transitions()
-        stationary = pi[1, 0] / (pi[0, 1] + pi[1, 0])
-        mu = np.empty((k, 2))
-        mu[:, 0], mu[:, 1] = stationary, 1.0 - stationary
-        return IMMState(x, P, mu)
+        return IMMState(*imm_init(xy, self._noise(r, self.r, k),
+                                  self._noise(vel_var, self.vel_var, k), self.transitions()))
 
     def predict(self, state: IMMState, q: FloatArray | None = None,
                 q_manoeuvre: FloatArray | None = None) -> IMMState:

@@ -233,6 +233,8 @@ class TrackerConfig:
         p[lc.P_SMOOTHING] = SIZE_SMOOTHING
         p[lc.P_TENTATIVE_ROWS] = float(self.output_tentative)
         p[lc.P_FRAME_W], p[lc.P_FRAME_H] = (-1.0, -1.0) if frame_size is None else frame_size
+        p[lc.P_BIRTH_IOU] = math.inf if self.birth_iou is None else self.birth_iou
+        p[lc.P_FPS] = self.fps
         return p
 
     def settings(self) -> dict[str, Any]:

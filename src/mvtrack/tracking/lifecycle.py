@@ -59,8 +59,8 @@ N_FLOAT = 7
 
 #: life-cycle parameters as :func:`advance` reads them (:meth:`TrackerConfig.life_cycle`)
 (P_CONFIRM_HITS, P_CONFIRM_SCORE, P_MAX_MISSES, P_LOST_STD, P_COAST_STD, P_SMOOTHING,
- P_TENTATIVE_ROWS, P_FRAME_W, P_FRAME_H) = range(9)
-N_PARAMS = 9
+ P_TENTATIVE_ROWS, P_FRAME_W, P_FRAME_H, P_BIRTH_IOU, P_FPS) = range(11)
+N_PARAMS = 11
 
 
 @kernel
@@ -186,6 +186,141 @@ def births(dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8],
         key[:] = dxy[idx, 0]
         idx = idx[np.argsort(key, kind="mergesort")]
     return idx
+
+
+@kernel
+def measurements(det_index: NDArray[np.intp], dxy: FloatArray, dwh: FloatArray,
+                 cscore: FloatArray, found: BoolArray, found_xy: FloatArray
+                 ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray, BoolArray]:
+    """Each track's measurement: its detection's centre, box and calibrated score, or the
+    position template matching found (``found``, ``found_xy``, (N,) and (N, 2)); NaN (score 0)
+    for none. Returns ``z``, ``zwh``, ``zscore``, ``rescued`` and ``held``."""
+    n = det_index.shape[0]
+    z = np.full((n, 2), np.nan)
+    zwh = np.full((n, 2), np.nan)
+    zscore = np.zeros(n)
+    rescued = np.zeros(n, np.bool_)
+    held = np.zeros(n, np.bool_)
+    for i in range(n):
+        j = det_index[i]
+        if j >= 0:
+            z[i, 0], z[i, 1] = dxy[j, 0], dxy[j, 1]
+            zwh[i, 0], zwh[i, 1] = dwh[j, 0], dwh[j, 1]
+            zscore[i] = cscore[j]
+            held[i] = True
+        elif found[i] and found_xy[i, 0] == found_xy[i, 0] and found_xy[i, 1] == found_xy[i, 1]:
+            z[i, 0], z[i, 1] = found_xy[i, 0], found_xy[i, 1]
+            rescued[i] = True
+            held[i] = True
+    return z, zwh, zscore, rescued, held
+
+
+@kernel
+def commit(ints: IntArray, floats: FloatArray, det_index: NDArray[np.intp],
+           rescued: BoolArray, z: FloatArray, zwh: FloatArray, zscore: FloatArray,
+           std: FloatArray, centre: FloatArray, pos: FloatArray, vel: FloatArray,
+           dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8], cscore: FloatArray,
+           k: int, p: FloatArray, next_id: int, next_uid: int):
+    """The life cycle of one frame, after the filter's update: :func:`advance`, the IDs of the
+    tracks confirmed now, the frame's rows, the tracks that live on and the new ones.
+
+    ``pos``, ``vel`` (N, 2) are the tracks' estimates after the update; the rest as in
+    :func:`advance` and :func:`births`. Returns
+
+    - ``ints``, ``floats``: the next frame's table (the surviving rows, then the new tracks);
+    - ``keep`` (intp): the surviving rows, ``new`` (intp): the detections that start tracks;
+    - the frame's rows ``tid, state, det, measured (·, 2), filtered, predicted, wh, velocity,
+      uid``: the shown tracks in table order, then the new tracks shown at once;
+    - ``next_id``, ``next_uid``;
+    - ``speed2`` (2,) and ``n_speed``: the sum of ``(v / box)²`` in (box sizes/s)² per axis
+      over the confirmed tracks matched now, and their number (the scene's speeds).
+    """
+    n, m = ints.shape[0], dxy.shape[0]
+    delete, confirmed_now, show = advance(ints, floats, det_index, rescued, z, zwh, zscore,
+                                          std, centre, k, p)
+    for i in range(n):  # IDs in birth order: rows are kept in uid order
+        if confirmed_now[i]:
+            ints[i, TID] = next_id
+            next_id += 1
+    speed2 = np.zeros(2)
+    n_speed = 0
+    fps = p[P_FPS]
+    for i in range(n):
+        if det_index[i] >= 0 and ints[i, STATE] == CONFIRMED:
+            vx, vy = vel[i, 0] * fps / floats[i, W], vel[i, 1] * fps / floats[i, H]
+            speed2[0] += vx * vx
+            speed2[1] += vy * vy
+            n_speed += 1
+    keep = np.flatnonzero(~delete)
+    used = np.zeros(m, np.bool_)
+    for i in range(n):
+        if det_index[i] >= 0:
+            used[det_index[i]] = True
+    kxy = np.empty((keep.size, 2))
+    kwh = np.empty((keep.size, 2))
+    for a in range(keep.size):
+        i = keep[a]
+        kxy[a, 0], kxy[a, 1] = pos[i, 0], pos[i, 1]
+        kwh[a, 0], kwh[a, 1] = floats[i, W], floats[i, H]
+    new = births(dxy, dwh, dclass, used, kxy, kwh, p[P_BIRTH_IOU])
+    b = new.size
+    ints2 = np.empty((keep.size + b, N_INT), np.int64)
+    floats2 = np.empty((keep.size + b, N_FLOAT))
+    for a in range(keep.size):
+        ints2[a] = ints[keep[a]]
+        floats2[a] = floats[keep[a]]
+    born_shown = np.zeros(b, np.bool_)
+    for e in range(b):
+        j, a = new[e], keep.size + e
+        ints2[a, UID] = next_uid + e
+        ints2[a, TID] = -1
+        ints2[a, STATE] = TENTATIVE
+        ints2[a, HITS] = 1
+        ints2[a, MISSES] = 0
+        ints2[a, AGE] = 1
+        ints2[a, LAST_K] = k
+        ints2[a, PREV_K] = k
+        floats2[a, LAST_X], floats2[a, LAST_Y] = dxy[j, 0], dxy[j, 1]
+        floats2[a, PREV_X], floats2[a, PREV_Y] = dxy[j, 0], dxy[j, 1]
+        floats2[a, W], floats2[a, H] = dwh[j, 0], dwh[j, 1]
+        floats2[a, SCORE] = cscore[j]
+        if p[P_CONFIRM_HITS] <= 1 and cscore[j] >= p[P_CONFIRM_SCORE]:
+            ints2[a, STATE] = CONFIRMED
+            ints2[a, TID] = next_id
+            next_id += 1
+        born_shown[e] = ints2[a, STATE] != TENTATIVE or p[P_TENTATIVE_ROWS] > 0
+    next_uid += b
+    rows = np.flatnonzero(show)
+    nb = np.flatnonzero(born_shown)
+    r = rows.size + nb.size
+    tid = np.empty(r, np.int64)
+    state = np.empty(r, np.int64)
+    det = np.empty(r, np.int64)
+    uid = np.empty(r, np.int64)
+    measured = np.empty((r, 2))
+    filtered = np.empty((r, 2))
+    predicted = np.empty((r, 2))
+    box = np.empty((r, 2))
+    velocity = np.empty((r, 2))
+    for a in range(rows.size):
+        i = rows[a]
+        tid[a], state[a], det[a], uid[a] = ints[i, TID], ints[i, STATE], det_index[i], ints[i, UID]
+        measured[a] = z[i]
+        filtered[a] = pos[i]
+        predicted[a] = centre[i]
+        box[a, 0], box[a, 1] = floats[i, W], floats[i, H]
+        velocity[a] = vel[i]
+    for e in range(nb.size):
+        a, c = rows.size + e, keep.size + nb[e]
+        j = new[nb[e]]
+        tid[a], state[a], det[a], uid[a] = ints2[c, TID], ints2[c, STATE], j, ints2[c, UID]
+        measured[a] = dxy[j]
+        filtered[a] = dxy[j]
+        predicted[a, 0] = predicted[a, 1] = np.nan
+        box[a] = dwh[j]
+        velocity[a, 0] = velocity[a, 1] = 0.0
+    return (ints2, floats2, keep, new, tid, state, det, measured, filtered, predicted, box,
+            velocity, uid, next_id, next_uid, speed2, n_speed)
 
 
 def hand_out_ids(ints: IntArray, confirmed_now: BoolArray, next_id: int) -> int:
