@@ -221,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scores", action="store_true",
                     help="give every detection a uniform random score in [0, 1] (the score "
                          "stages' worst case: half the boxes low)")
-    ap.add_argument("--low-birth-iou", default=None,
+    ap.add_argument("--birth-iou", default=None,
                     help="TrackerConfig.low_birth_iou (a number, or 'none')")
     ap.add_argument("--variants", action="store_true",
                     help="one run of each variant of the default (Markdown rows)")
@@ -249,14 +249,14 @@ def main(argv: list[str] | None = None) -> int:
         )
         if v is not None
     }
-    if args.low_birth_iou is not None:
-        lb = args.low_birth_iou.lower()
-        changes["low_birth_iou"] = None if lb == "none" else float(lb)
+    if args.birth_iou is not None:
+        lb = args.birth_iou.lower()
+        changes["birth_iou"] = None if lb == "none" else float(lb)
     config = TrackerConfig(**changes)
     print(
         f"config: predictor={config.predictor} distance={config.distance} "
         f"assign={config.assign} gate={config.gate} confirm_hits={config.confirm_hits} "
-        f"max_coast={config.max_coast}s fps={config.fps} low_birth_iou={config.low_birth_iou}"
+        f"max_misses={config.max_misses} fps={config.fps} birth_iou={config.birth_iou}"
         + (" (uniform random scores)" if args.scores else "")
     )
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")

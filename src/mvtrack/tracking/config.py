@@ -128,7 +128,7 @@ class TrackerConfig:
     confirm_score: float = 1.0
     max_misses: int = 10
     lost_std: float | None = 0.3
-    coast_std: float | None = None
+    coast_std: float | None = 0.05
     score_scale: str | tuple[float, float] = "auto"
     score_high: float | None = 0.5
     min_score: float = 0.1

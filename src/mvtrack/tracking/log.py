@@ -232,65 +232,74 @@ def backfill(frames: list[TrackFrame], uids: list[NDArray[np.int64]]) -> list[Tr
     return out
 
 
-def interpolate_gaps(frames: list[TrackFrame], tail: int | None = None) -> list[TrackFrame]:
+def interpolate_gaps(frames: list[TrackFrame]) -> list[TrackFrame]:
     """Fill the gaps of every track by linear interpolation between its measured rows.
 
     Offline post-processing (the linear interpolation of ByteTrack's and other offline
     MOTChallenge trackers). A row is *anchored* when it carries a measurement (a detection,
-    or a template match in the ``STOPPED`` state). A run of unanchored (coasting) rows
-    between two anchored rows ``a`` and ``b`` of the same track is re-estimated from them:
-    for a row at frame ``k``, with ``t = (k - k_a) / (k_b - k_a)``,
+    or a template match in the ``STOPPED`` state). Between two anchored rows ``a`` and ``b``
+    of the same track, every frame ``k`` gets a row — the coasting row the tracker wrote, or
+    a new one — re-estimated from them, with ``t = (k - k_a) / (k_b - k_a)``:
 
     ``x_k = (1 - t) x_a + t x_b``,  ``wh_k = (1 - t) wh_a + t wh_b``,
     ``v_k = (x_b - x_a) / (k_b - k_a)``
 
-    (``x`` the filtered position); the rows keep their ``COASTING`` state. A run after a
-    track's last anchored row (the track was deleted, or the sequence ended) is not bridged;
-    only its first ``tail`` rows are kept (all with ``tail=None``).
+    (``x`` the filtered position), in state ``COASTING`` without measurement. Rows after a
+    track's last anchored row are kept as the tracker wrote them.
 
     Parameters
     ----------
     frames : list of TrackFrame
-        A run's output, every coasting row included.
-    tail : int or None
-        Coasting rows kept after a track's last anchored row.
+        A run's output, in increasing frame order.
 
     Returns
     -------
     list of TrackFrame
-        One frame per input frame, same order, with the rows of each frame in their input
-        order (rows dropped from tails left out).
+        Every frame that holds a row, in order; within a frame the rows of ``frames`` first,
+        then the new rows by track ID.
     """
     if not frames:
         return []
     c = _columns(frames)
-    n = c["frame"].size
     tid, frame_of = c["track_id"], c["frame"]
-    # rows without a public ID (tentative tracks, output_tentative) are left as they are
+    # rows without a public ID (tentative tracks) are left as they are
     anchored = (c["det_index"] >= 0) | (c["state"] == int(TrackState.STOPPED)) | (tid <= 0)
-    if anchored.all():
+    rows = np.flatnonzero(anchored & (tid > 0))
+    rows = rows[np.lexsort((frame_of[rows], tid[rows]))]  # by track, then frame
+    a, b = rows[:-1], rows[1:]
+    gap = (tid[a] == tid[b]) & (frame_of[b] - frame_of[a] > 1)
+    a, b = a[gap], b[gap]
+    if a.size == 0:
         return list(frames)
-    order = np.lexsort((frame_of, tid))  # by track, then frame
-    s_tid, s_frame, s_anchor = tid[order], frame_of[order], anchored[order]
-    pos = np.arange(n)
-    prev = np.maximum.accumulate(np.where(s_anchor, pos, -1))
-    nxt = np.minimum.accumulate(np.where(s_anchor, pos, n)[::-1])[::-1]
-    has_prev = (prev >= 0) & (s_tid[np.maximum(prev, 0)] == s_tid)
-    has_next = (nxt < n) & (s_tid[np.minimum(nxt, n - 1)] == s_tid)
-    inner = ~s_anchor & has_prev & has_next
-    keep_sorted = np.ones(n, dtype=bool)
-    if tail is not None:
-        after = ~s_anchor & has_prev & ~has_next
-        keep_sorted[after] = (s_frame - s_frame[np.maximum(prev, 0)])[after] <= tail
-
-    rows = order[inner]  # positions in the concatenated arrays
-    a, b = order[prev[inner]], order[nxt[inner]]
-    span = (frame_of[b] - frame_of[a]).astype(np.float64)
-    t = ((frame_of[rows] - frame_of[a]) / span)[:, None]
-    xy, wh = c["filtered_xy"], c["wh"]  # new arrays (_columns): changed in place
-    xy[rows] = (1.0 - t) * xy[a] + t * xy[b]
-    wh[rows] = (1.0 - t) * wh[a] + t * wh[b]
-    c["velocity"][rows] = (xy[b] - xy[a]) / span[:, None]
-    keep = np.empty(n, dtype=bool)
-    keep[order] = keep_sorted
-    return _split(frames, c, keep)
+    span = frame_of[b] - frame_of[a]
+    n_new = span - 1
+    src_a = np.repeat(a, n_new)
+    src_b = np.repeat(b, n_new)
+    step = np.arange(n_new.sum()) - np.repeat(np.cumsum(n_new) - n_new, n_new) + 1
+    k = frame_of[src_a] + step
+    t = (step / np.repeat(span, n_new))[:, None]
+    xy, wh = c["filtered_xy"], c["wh"]
+    new = {
+        "frame": k, "track_id": tid[src_a],
+        "state": np.full(k.size, int(TrackState.COASTING), np.int64),
+        "det_index": np.full(k.size, -1, np.int64),
+        "measured_xy": np.full((k.size, 2), np.nan),
+        "filtered_xy": (1.0 - t) * xy[src_a] + t * xy[src_b],
+        "predicted_xy": np.full((k.size, 2), np.nan),
+        "wh": (1.0 - t) * wh[src_a] + t * wh[src_b],
+        "velocity": np.repeat((xy[b] - xy[a]) / span[:, None], n_new, axis=0),
+    }
+    # the tracker's own rows in the gaps are replaced by the new ones
+    width = int(tid.max()) + 1
+    old = ~np.isin(frame_of * width + tid, k * width + new["track_id"])
+    order_new = np.lexsort((new["track_id"], k))
+    allc = {name: np.concatenate([c[name][old], new[name][order_new]])
+            for name in ("frame", *_FIELDS)}
+    first = np.concatenate([np.zeros(int(old.sum()), np.int64), np.ones(k.size, np.int64)])
+    order = np.lexsort((np.arange(first.size), first, allc["frame"]))
+    fr = allc["frame"][order]
+    cuts = np.flatnonzero(np.diff(fr)) + 1
+    out = []
+    for idx in np.split(order, cuts):
+        out.append(TrackFrame(int(allc["frame"][idx[0]]), *(allc[n][idx] for n in _FIELDS)))
+    return out

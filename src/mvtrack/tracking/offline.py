@@ -43,8 +43,7 @@ def track_detections(
     ``backfill_rows`` (and without ``config.output_tentative``) a confirmed track's rows start
     at its first detection (:func:`mvtrack.tracking.log.backfill`); with ``interpolate`` the
     gaps a track bridged are written in full, interpolated
-    (:func:`mvtrack.tracking.log.interpolate_gaps`), and after its last measurement the rows
-    ``config.coast_std`` shows (none by default, all for ``inf``).
+    (:func:`mvtrack.tracking.log.interpolate_gaps`).
 
     The ``"auto"`` score scale is calibrated on the scores seen so far, as online (the same
     thresholds mean the same in both modes); ``scores`` (for example every score of the file)
@@ -53,8 +52,6 @@ def track_detections(
     config = TrackerConfig() if config is None else config
     late = backfill_rows and not config.output_tentative
     inner = config.replace(output_tentative=True) if late else config
-    if interpolate:  # every coasting row, to be interpolated or cut afterwards
-        inner = inner.replace(coast_std=float("inf"))
     tracker = Tracker(inner)
     if scores is not None:
         tracker.prime_scores(scores)
@@ -88,7 +85,7 @@ def track_detections(
     if late:
         out = backfill(out, uids)
     if interpolate:
-        out = interpolate_gaps(out, 0 if config.coast_std is None else None)
+        out = interpolate_gaps(out)
     log = TrackLog()
     if first is None:
         return log
