@@ -90,7 +90,7 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
     values (:func:`_pair_cost`), sorted by track then detection.
 
     A track's gate reaches ``√(g s_xx)`` along x and ``√(g s_yy)`` along y. A small frame is
-    tested pair by pair; a large one bins the detections into square cells of the mean
+    tested pair by pair; a large one bins the detections into square cells of the median
     reach and tests each track against the cells its reach covers.
     """
     n, m = cx.shape[0], dxy.shape[0]
@@ -117,22 +117,33 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                     ti[k], dj[k], cost[k] = i, j, c
                     k += 1
         return ti[:k], dj[:k], cost[:k]
-    # a grid of square cells over the detections
+    # the detections binned into square cells of the median reach (CSR: the members of cell
+    # c are members[start[c]:start[c + 1]], cells numbered column by column)
     reach = np.empty(tr.size)
     for a in range(tr.size):
         i = tr[a]
-        reach[a] = max(math.sqrt(gate * S[i, 0]), math.sqrt(gate * S[i, 2]))
-    cell = max(reach.mean(), 1.0)
-    x0 = dxy[dr, 0].min()
-    y0 = dxy[dr, 1].min()
-    nx = int((dxy[dr, 0].max() - x0) / cell) + 1
-    ny = int((dxy[dr, 1].max() - y0) / cell) + 1
-    key = np.empty(dr.size, np.int64)
+        reach[a] = math.sqrt(gate * max(S[i, 0], S[i, 2]))
+    cell = max(np.median(reach), 1.0)
+    x0, x1 = dxy[dr, 0].min(), dxy[dr, 0].max()
+    y0, y1 = dxy[dr, 1].min(), dxy[dr, 1].max()
+    nx, ny = int((x1 - x0) / cell) + 1, int((y1 - y0) / cell) + 1
+    while nx * ny > 4 * dr.size + 16:  # no more cells than a few per detection
+        cell *= 2.0
+        nx, ny = int((x1 - x0) / cell) + 1, int((y1 - y0) / cell) + 1
+    cid = np.empty(dr.size, np.int64)
+    start = np.zeros(nx * ny + 1, np.int64)
     for b in range(dr.size):
         j = dr[b]
-        key[b] = int((dxy[j, 0] - x0) / cell) * ny + int((dxy[j, 1] - y0) / cell)
-    order = np.argsort(key, kind="mergesort")
-    skey = key[order]
+        c = int((dxy[j, 0] - x0) / cell) * ny + int((dxy[j, 1] - y0) / cell)
+        cid[b] = c
+        start[c + 1] += 1
+    for c in range(nx * ny):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    members = np.empty(dr.size, np.intp)
+    for b in range(dr.size):
+        members[fill[cid[b]]] = dr[b]
+        fill[cid[b]] += 1
     for a in range(tr.size):
         i = tr[a]
         rx, ry = math.sqrt(gate * S[i, 0]), math.sqrt(gate * S[i, 2])
@@ -142,10 +153,10 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
         gy1 = min(math.floor((cx[i, 1] + ry - y0) / cell), ny - 1)
         first = k
         for gx in range(gx0, gx1 + 1):
-            lo = np.searchsorted(skey, gx * ny + gy0)
-            hi = np.searchsorted(skey, gx * ny + gy1, side="right")
-            for p in range(lo, hi):
-                j = dr[order[p]]
+            if gy1 < gy0:
+                break
+            for p in range(start[gx * ny + gy0], start[gx * ny + gy1 + 1]):
+                j = members[p]
                 if abs(dxy[j, 0] - cx[i, 0]) > rx or abs(dxy[j, 1] - cx[i, 1]) > ry:
                     continue
                 c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w, size_log)
@@ -154,11 +165,13 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                         cap *= 2
                         ti, dj, cost = _grow(ti, dj, cost, cap)
                     ti[k], dj[k], cost[k] = i, j, c
+                    # keep this track's pairs in detection order (insertion, a few at most)
+                    e = k
+                    while e > first and dj[e - 1] > dj[e]:
+                        dj[e - 1], dj[e] = dj[e], dj[e - 1]
+                        cost[e - 1], cost[e] = cost[e], cost[e - 1]
+                        e -= 1
                     k += 1
-        if k - first > 1:  # this track's pairs in detection order
-            o = np.argsort(dj[first:k], kind="mergesort")
-            dj[first:k] = dj[first:k][o]
-            cost[first:k] = cost[first:k][o]
     return ti[:k], dj[:k], cost[:k]
 
 
@@ -279,21 +292,39 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
                 dused[dj[q]] = True
                 det_index[ti[q]] = dj[q]
         return
-    # optimal: connected components of the gate graph (tracks 0..n-1, detections n..n+m-1)
-    parent = np.arange(n + m)
+    # optimal: a pair whose track and detection have no other pair is matched as it is; the
+    # rest by connected components of the gate graph (tracks 0..n-1, detections n..n+m-1)
+    tdeg = np.zeros(n, np.intp)
+    ddeg = np.zeros(m, np.intp)
     for q in range(p):
+        tdeg[ti[q]] += 1
+        ddeg[dj[q]] += 1
+    rest = np.empty(p, np.intp)
+    nr = 0
+    for q in range(p):
+        if tdeg[ti[q]] == 1 and ddeg[dj[q]] == 1:
+            det_index[ti[q]] = dj[q]
+        else:
+            rest[nr] = q
+            nr += 1
+    if nr == 0:
+        return
+    rest = rest[:nr]
+    parent = np.arange(n + m)
+    for q in rest:
         a, b = _find(parent, ti[q]), _find(parent, n + dj[q])
         if a != b:
             parent[max(a, b)] = min(a, b)
-    root = np.empty(p, np.intp)
+    root = np.empty(nr, np.intp)
     size = np.zeros(n + m, np.intp)
-    for q in range(p):
-        root[q] = _find(parent, ti[q])
-        size[root[q]] += 1
-    order = np.argsort(root, kind="mergesort")
+    for e in range(nr):
+        root[e] = _find(parent, ti[rest[e]])
+        size[root[e]] += 1
+    order = rest[np.argsort(root, kind="mergesort")]
+    p = nr
     q0 = 0
     while q0 < p:
-        r = root[order[q0]]
+        r = _find(parent, ti[order[q0]])
         q1 = q0 + size[r]
         if q1 - q0 == 1:  # one pair: no conflict
             q = order[q0]
