@@ -14,6 +14,7 @@ from mvtrack.cli._options import (
     ConfigFile,
     DetectorName,
     Distance,
+    Force,
     Gate,
     NoTemplates,
     NoVideo,
@@ -98,7 +99,11 @@ def register(app: typer.Typer) -> None:
             ),
         ],
         out: Annotated[
-            Path, typer.Option(help="Output folder: one sub-folder per video and batch.json.")
+            Path,
+            typer.Option(help="Output folder: one sub-folder per video and batch.json. It "
+                         "holds this batch only: a folder with an earlier batch or run is "
+                         "replaced when this one finishes; a folder with other files is "
+                         "refused unless --force."),
         ],
         workers: Annotated[
             int | None,
@@ -120,6 +125,7 @@ def register(app: typer.Typer) -> None:
         config: ConfigFile = None,
         no_video: NoVideo = False,
         no_templates: NoTemplates = False,
+        force: Force = False,
         max_frames: Annotated[
             int | None, typer.Option(help="Track at most this many frames of each video.")
         ] = None,
@@ -136,6 +142,7 @@ def register(app: typer.Typer) -> None:
         are cancelled).
         """
         from mvtrack.cli import _signals
+        from mvtrack.io.outdir import run_folder
         from mvtrack.video.batch import track_many
 
         if workers is not None and workers < 1:
@@ -144,22 +151,19 @@ def register(app: typer.Typer) -> None:
             raise ValueError("--workers sets up a local cluster; do not give it with --scheduler")
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
-        if fps is not None and not fps > 0:
-            raise ValueError(f"--fps must be positive, got {fps}")
-        if out.exists() and not out.is_dir():
-            raise ValueError(f"--out {out} is a file, not a folder")
         sources = expand_videos(videos)
 
         # the same settings as `mvtrack track` builds from the same options
         settings = video_settings(
             config=config, preset=preset, predictor=predictor, gate=gate, distance=distance,
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
+            fps=fps,
         )
-
-        items = track_many(
-            sources, out, settings, workers=workers, scheduler=scheduler, fps=fps,
-            max_frames=max_frames,
-        )
+        with run_folder(out, force=force, inputs=sources):
+            items = track_many(
+                sources, out, settings, workers=workers, scheduler=scheduler,
+                fps=settings.frame_rate, max_frames=max_frames,
+            )
         ok = [it for it in items if it.status == "ok"]
         failed = [it for it in items if it.status == "failed"]
         cancelled = [it for it in items if it.status == "cancelled"]

@@ -42,7 +42,9 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     default (a gate is in the distance's units: px² for ``euclidean``, χ² for the others);
     naming the preset's own distance changes nothing (:func:`mvtrack.tracking.preset`).
     TOML has no null, so the string ``"none"`` (any case) stands for ``None`` (e.g.
-    ``second_gate = "none"`` turns the second stage off).
+    ``second_gate = "none"`` turns the second stage off). A ``fps`` in ``settings.tracker``
+    (``[tracker] fps`` of a settings file) wins over ``fps``: ``mvtrack track`` gives the
+    source the same frame rate (:meth:`mvtrack.config.RunSettings.frame_rate`).
 
     Raises
     ------
@@ -54,6 +56,9 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     params = {k: None if isinstance(v, str) and v.lower() == "none" else v
               for k, v in settings.tracker.items()}
     name = params.pop("preset", "default")
+    # [tracker] fps (or --fps, which the command line puts there) is the run's frame rate:
+    # it replaces the source's, and is given to the preset once
+    fps = params.pop("fps", fps)
     if name not in PRESETS:
         raise InputError(f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}")
     known = {f.name for f in dataclasses.fields(TrackerConfig)}
