@@ -274,7 +274,7 @@ def _signature_types(targets: list[Callable[..., Any]]) -> dict[str, str]:
     return types
 
 
-def _detector_signatures(name: str) -> list[Callable[..., Any]]:
+def detector_signatures(name: str) -> list[Callable[..., Any]]:
     """The constructors whose parameters a ``[detector]`` table of front end ``name`` sets."""
     from mvtrack.registry import DETECTORS, load
 
@@ -287,14 +287,12 @@ def _detector_signatures(name: str) -> list[Callable[..., Any]]:
     return targets
 
 
-def _template_signatures() -> list[Callable[..., Any]]:
+def template_signatures() -> list[Callable[..., Any]]:
+    """The constructors whose parameters a ``[templates]`` table sets."""
     from mvtrack.detection.template import TemplateBank
+    from mvtrack.video.rescue import StoppedVehicleRescuer
 
-    def guard(max_shift: float = 0.0) -> None:  # the rescuer's own parameter
-        """The stopped-vehicle guard's ``max_shift`` (:mod:`mvtrack.video.build`)."""
-
-    guard.__annotations__ = {"max_shift": "float"}
-    return [TemplateBank, guard]
+    return [TemplateBank, StoppedVehicleRescuer.__init__]
 
 
 _TYPE_WORDS = {"float": "a number", "int": "an integer", "bool": "true or false",
@@ -302,13 +300,18 @@ _TYPE_WORDS = {"float": "a number", "int": "an integer", "bool": "true or false"
 
 
 def _check_params(path: Path, table: str, params: Mapping[str, Any],
-                  targets: list[Callable[..., Any]]) -> None:
-    """Check the type of every value of a ``[detector]`` / ``[templates]`` table against the
-    annotation of the constructor parameter it sets (unknown keys are left to the
-    constructor, whose message names them)."""
+                  targets: list[Callable[..., Any]]) -> dict[str, Any]:
+    """``params`` of a ``[detector]`` / ``[templates]`` table, each value checked against the
+    annotation of the constructor parameter it sets, ``"none"`` read as None where the
+    parameter takes None (unknown keys are left to the constructor, whose message names
+    them)."""
     types = _signature_types(targets)
+    out = dict(params)
     for key, value in params.items():
         kinds = [k.strip() for k in types.get(key, "").split("|")]
+        if "None" in kinds and isinstance(value, str) and value.lower() == "none":
+            out[key] = None
+            continue
         wanted = [k for k in kinds if k in _TYPE_WORDS]
         if not wanted or len(wanted) < len([k for k in kinds if k != "None"]):
             continue  # a type this check does not know
@@ -319,7 +322,10 @@ def _check_params(path: Path, table: str, params: Mapping[str, Any],
                   or (isinstance(value, str) and "str" in wanted))))
         if not ok:
             words = " or ".join(_TYPE_WORDS[k] for k in wanted)
+            if "None" in kinds:
+                words += ' or "none"'
             raise InputError(f"{path}: {table}.{key} must be {words}, got {value!r}")
+    return out
 
 
 def _tracker_fields() -> set[str] | None:
@@ -379,7 +385,8 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
                 raise _unknown(path, f"tracker.{key}", known | {"preset"})
     if "preset" in tracker:
         _check_type(path, "tracker.preset", tracker["preset"], str)
-    if "gate" in tracker:
+    if "gate" in tracker and not (isinstance(tracker["gate"], str)
+                                  and tracker["gate"].lower() == "none"):
         _check_type(path, "tracker.gate", tracker["gate"], (int, float))
     check_tracker(tracker, lambda key: f"{path}: tracker.{key}", f"{path}: [tracker]")
 
@@ -392,12 +399,12 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
             f"{', '.join(DETECTORS)})"
         )
 
-    _check_params(path, "detector", detector_table, _detector_signatures(name))
+    detector_table = _check_params(path, "detector", detector_table, detector_signatures(name))
 
     template_table = dict(data.get("templates", {}))
     enabled = template_table.pop("enabled", True)
     _check_type(path, "templates.enabled", enabled, bool)
-    _check_params(path, "templates", template_table, _template_signatures())
+    template_table = _check_params(path, "templates", template_table, template_signatures())
 
     video_table = data.get("video", {})
     for key in video_table:

@@ -17,6 +17,7 @@ import typer
 from mvtrack.cli import (
     _signals,
     batch,
+    config,
     demo,
     evaluate,
     experiment,
@@ -64,7 +65,9 @@ def _root(
         set_verbose()
 
 
-for _module in (demo, track, track_detections, batch, evaluate, simulate, experiment, report):
+for _module in (
+    demo, track, track_detections, batch, evaluate, simulate, experiment, report, config,
+):
     _module.register(app)
 
 # Typer ships its own copy of Click; find its exception classes through a public name.
