@@ -123,7 +123,8 @@ def relink_settings(table: dict[str, Any] | None) -> RelinkSettings:
                          f"{', '.join(sorted(known))})")
     return RelinkSettings(**table)
 
-_TABLES: dict[str, tuple[str, ...]] = {
+#: the tables of a settings file, and the keys of those whose keys are fixed
+TABLES: dict[str, tuple[str, ...]] = {
     "tracker": (),  # checked against TrackerConfig fields (plus "preset")
     "detector": (),  # "name" plus the detector's parameters
     "templates": (),  # "enabled" plus TemplateBank parameters
@@ -372,8 +373,8 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
         raise InputError(f"cannot read config file {path}: {exc}") from None
 
     for key, value in data.items():
-        if key not in _TABLES:
-            raise _unknown(path, key, tuple(_TABLES))
+        if key not in TABLES:
+            raise _unknown(path, key, tuple(TABLES))
         if not isinstance(value, dict):
             raise InputError(f"{path}: {key} must be a table ([{key}]), got {value!r}")
 
@@ -408,8 +409,8 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
 
     video_table = data.get("video", {})
     for key in video_table:
-        if key not in _TABLES["video"]:
-            raise _unknown(path, f"video.{key}", _TABLES["video"])
+        if key not in TABLES["video"]:
+            raise _unknown(path, f"video.{key}", TABLES["video"])
     write = video_table.get("write", True)
     trail = video_table.get("trail", RunSettings.trail)
     gates = video_table.get("gates", True)
