@@ -101,3 +101,37 @@ def test_results_with_ground_truth_columns_get_a_warning(tmp_path: Path, capsys)
     assert "class and visibility columns (8, 9) of ground truth" in err and "swapped?" in err
     assert main(["eval", "--gt", str(gt), "--pred", str(res), "--no-hota"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_snapshot_ids_stay_readable_beside_the_header_and_each_other(tmp_path: Path) -> None:
+    """`mvtrack track VIDEO --snapshot N` on a vehicle under the frame's header and two side by
+    side: three ID labels, none under the header, none touching another, each with digits."""
+    import cv2
+    import numpy as np
+
+    path = tmp_path / "v.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 15, (320, 240))
+    for k in range(30):
+        img = np.full((240, 320, 3), 80, np.uint8)
+        if k >= 5:
+            img[22:40, 60 + k : 72 + k] = 230  # under the header's second line
+            img[120 + k : 140 + k, 200:204] = 230  # two side by side, 9 px apart
+            img[120 + k : 140 + k, 213:217] = 230
+        writer.write(img)
+    writer.release()
+    out = tmp_path / "out"
+    assert main(["track", str(path), "--out", str(out), "--snapshot", "25", "--no-video",
+                 "--detector", "disturbance-map", "--preset", "paper1"]) == 0
+    shot = cv2.imread(str(out / "frame00025.png"))
+    dark = (shot == 20).all(axis=2).astype(np.uint8)
+    _, _, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
+    patches = [(x, y, x + w - 1, y + h - 1) for x, y, w, h, a in stats[1:] if a > 20]
+    header = [p for p in patches if p[0] <= 4]
+    labels = [p for p in patches if p[0] > 4]
+    assert len(labels) == 3, patches
+    b, g, r = (shot[..., c].astype(int) for c in range(3))
+    green = (g > 100) & (g > r + 40) & (g > b + 40)
+    for x0, y0, x1, y1 in labels:
+        assert green[y0 : y1 + 1, x0 : x1 + 1].sum() >= 5
+        for h in header:
+            assert x0 > h[2] or y0 > h[3] or y1 < h[1]
