@@ -161,7 +161,7 @@ def test_none_reads_as_none_in_the_front_ends_table(tmp_path: Path) -> None:
         (["--gate", "wide"], "--gate must be a number"),
     ],
 )
-@pytest.mark.parametrize("command", ["track", "track-detections"])
+@pytest.mark.parametrize("command", ["track", "track-detections", "batch"])
 def test_a_bad_option_is_named(tmp_path: Path, capsys, args: list[str], fragment: str,
                                command: str) -> None:
     video = box_video(tmp_path / "v.avi", n=10)
@@ -227,3 +227,29 @@ def test_track_detections_reads_the_tracker_table(tmp_path: Path, capsys) -> Non
     cfg.write_text("[tracker]\nmax_coast = -1\n")
     assert main(["track-detections", str(det), "--out", str(out), "--config", str(cfg)]) == 2
     assert f"{cfg}: tracker.max_coast must be" in _err(capsys)
+
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+
+
+@pytest.mark.parametrize("page", ["config.md", "other-trackers.md"])
+def test_every_toml_block_of_the_docs_is_a_valid_settings_file(tmp_path: Path,
+                                                               page: str) -> None:
+    """The examples of the settings pages load and build a tracker (a renamed or removed
+    setting fails here first)."""
+    import re
+
+    blocks = re.findall(r"```toml\n(.*?)```", (DOCS / page).read_text(), flags=re.S)
+    assert blocks
+    for k, block in enumerate(blocks):
+        f = tmp_path / f"{k}.toml"
+        f.write_text(block)
+        s = load_config(f)
+        assert s.tracker
+        build_tracker_config(s, s.frame_rate or 30.0)
+
+
+def test_the_settings_pages_are_linked_from_the_help(capsys) -> None:
+    assert main(["track", "--help"]) == 0
+    assert "docs/config.md" in " ".join(capsys.readouterr().out.split())
+    assert (DOCS / "config.md").exists() and (DOCS / "other-trackers.md").exists()

@@ -16,10 +16,12 @@ from mvtrack.cli._options import (
     Distance,
     Force,
     Gate,
+    MinScore,
     NoTemplates,
     NoVideo,
     Predictor,
     Preset,
+    ScoreHigh,
     video_settings,
 )
 
@@ -123,6 +125,13 @@ def register(app: typer.Typer) -> None:
         assign: Assign = None,
         detector: DetectorName = None,
         config: ConfigFile = None,
+        score_high: ScoreHigh = None,
+        min_score: MinScore = None,
+        coasting: Annotated[
+            bool,
+            typer.Option("--coasting/--no-coasting",
+                         help="Also write the rows of coasting tracks to each results.txt."),
+        ] = False,
         no_video: NoVideo = False,
         no_templates: NoTemplates = False,
         force: Force = False,
@@ -157,7 +166,7 @@ def register(app: typer.Typer) -> None:
         settings = video_settings(
             config=config, preset=preset, predictor=predictor, gate=gate, distance=distance,
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
-            fps=fps,
+            score_high=score_high, min_score=min_score, fps=fps, coasting=coasting,
         )
         with run_folder(out, force=force, inputs=sources):
             items = track_many(
