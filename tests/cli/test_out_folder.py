@@ -165,3 +165,24 @@ def test_a_folder_that_only_looks_like_a_run_is_foreign(tmp_path: Path) -> None:
     assert foreign_entries(tmp_path) == ["results.txt", "summary.json"]
     with pytest.raises(InputError, match="mvtrack did not write"), run_folder(tmp_path):
         pass
+
+
+def test_the_readme_examples_run_twice(tmp_path: Path, monkeypatch, capsys) -> None:
+    """Rerunning the README's commands: the simulated scene's folder holds the runs made from
+    it (a track run, a folder of track-detections results) and is replaced with them."""
+    monkeypatch.chdir(tmp_path)
+    for _ in range(2):
+        assert main(["simulate", "x5", "--frames", "20", "--out", "out/x5"]) == 0
+        assert main(["track", "out/x5/video.mp4", "--out", "out/x5/track", "--snapshot", "10",
+                     "--no-video"]) == 0
+        assert main(["simulate", "crowd", "--n", "10", "--frames", "20", "--detections",
+                     "--out", "out/crowd"]) == 0
+        assert main(["track-detections", "out/crowd/det.txt", "--out", "out/crowd/res",
+                     "--fps", "30"]) == 0
+    assert _names(Path("out/x5")) == {"gt.txt", "video.mp4", "scene.json", "track"}
+    assert _names(Path("out/crowd/res")) == {"det.txt"}
+    # a file of the user's own beside them is never deleted
+    Path("out/crowd/res/notes.txt").write_text("mine")
+    assert main(["simulate", "crowd", "--n", "10", "--frames", "20", "--out", "out/crowd"]) == 2
+    assert "'res/'" in _err(capsys)
+    assert Path("out/crowd/res/notes.txt").read_text() == "mine"

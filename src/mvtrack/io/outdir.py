@@ -74,13 +74,35 @@ def _has_marker(folder: Path) -> bool:
     return False
 
 
+#: the first line of a MOTChallenge results file as mvtrack writes it
+_RESULTS_ROW = re.compile(r"\d+,-?\d+(,-?\d+\.\d+){4},[-+.\deE]+,-1,-1,-1")
+
+
+def _results_only(folder: Path) -> bool:
+    """Whether ``folder`` holds only results files as ``mvtrack track-detections`` writes
+    them (``<sequence>.txt``, MOTChallenge rows ending in -1,-1,-1), or nothing."""
+    for p in folder.iterdir():
+        if not (p.is_file() and p.suffix == ".txt") and not _PATTERNS[1].fullmatch(p.name):
+            return False
+        if p.suffix == ".txt":
+            try:
+                with p.open(encoding="utf-8") as fh:
+                    first = fh.readline().strip()
+            except (OSError, UnicodeDecodeError):
+                return False
+            if first and not _RESULTS_ROW.fullmatch(first):
+                return False
+    return True
+
+
 def foreign_entries(folder: Path) -> list[str]:
     """Names in ``folder`` that are not an earlier mvtrack run's (empty: it is one, or empty).
 
     A folder is an earlier run when it has a run's summary (``summary.json``, ``scene.json``
     or ``batch.json`` as mvtrack writes them) and every entry is a file mvtrack writes or a
-    sub-folder that is itself an earlier run (the videos of a batch, a run inside a simulated
-    scene's folder). Any entry in a folder without such a summary is foreign.
+    sub-folder made from it: itself an earlier run (the videos of a batch, a run inside a
+    simulated scene's folder) or a folder of ``mvtrack track-detections`` results. Any entry
+    in a folder without such a summary is foreign.
     """
     entries = sorted(folder.iterdir(), key=lambda p: p.name)
     if not entries:
@@ -90,7 +112,7 @@ def foreign_entries(folder: Path) -> list[str]:
     out = []
     for p in entries:
         if p.is_dir() and not p.is_symlink():
-            if foreign_entries(p):
+            if foreign_entries(p) and not _results_only(p):
                 out.append(p.name + "/")
         elif not _is_output_name(p.name):
             out.append(p.name)
