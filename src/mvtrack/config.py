@@ -374,7 +374,8 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
 
     for key, value in data.items():
         if key not in TABLES:
-            raise _unknown(path, key, tuple(TABLES))
+            raise InputError(f"{path}: unknown table [{key}] (known: "
+                             f"{', '.join(sorted(TABLES))})")
         if not isinstance(value, dict):
             raise InputError(f"{path}: {key} must be a table ([{key}]), got {value!r}")
 

@@ -48,7 +48,8 @@ def test_a_folder_with_other_files_is_refused_and_force_keeps_them(tmp_path: Pat
     (out / "notes.txt").write_text("my notes")
     assert main(["track", str(video), "--out", str(out), "--no-video"]) == 2
     err = _err(capsys)
-    assert f"--out {out} is not empty" in err and "'notes.txt'" in err and "--force" in err
+    assert f"--out {out} is not empty and is not the folder of an earlier mvtrack run" in err
+    assert "'notes.txt'" in err and "--force" in err
     assert _names(out) == {"notes.txt"}
     assert main(["track", str(video), "--out", str(out), "--no-video", "--force"]) == 0
     assert (out / "notes.txt").read_text() == "my notes"
@@ -163,7 +164,8 @@ def test_a_folder_that_only_looks_like_a_run_is_foreign(tmp_path: Path) -> None:
     (tmp_path / "summary.json").write_text('{"my": "own summary"}')
     (tmp_path / "results.txt").write_text("x\n")
     assert foreign_entries(tmp_path) == ["results.txt", "summary.json"]
-    with pytest.raises(InputError, match="mvtrack did not write"), run_folder(tmp_path):
+    with pytest.raises(InputError, match="not the folder of an earlier mvtrack run"), \
+            run_folder(tmp_path):
         pass
 
 
@@ -186,3 +188,18 @@ def test_the_readme_examples_run_twice(tmp_path: Path, monkeypatch, capsys) -> N
     assert main(["simulate", "crowd", "--n", "10", "--frames", "20", "--out", "out/crowd"]) == 2
     assert "'res/'" in _err(capsys)
     assert Path("out/crowd/res/notes.txt").read_text() == "mine"
+
+
+def test_another_commands_folder_is_not_replaced(tmp_path: Path, capsys) -> None:
+    """A simulated scene's folder (its ground truth and detections) is not a track run's:
+    tracking into it is refused, and --force writes beside its files."""
+    scene = tmp_path / "crowd"
+    assert main(["simulate", "crowd", "--n", "5", "--frames", "10", "--detections",
+                 "--out", str(scene)]) == 0
+    video = box_video(tmp_path / "v.avi", n=10)
+    capsys.readouterr()
+    assert main(["track", str(video), "--out", str(scene), "--no-video"]) == 2
+    assert f"--out {scene} holds a run of mvtrack simulate, not of mvtrack track" in _err(capsys)
+    assert _names(scene) == {"gt.txt", "det.txt", "scene.json"}
+    assert main(["track", str(video), "--out", str(scene), "--no-video", "--force"]) == 0
+    assert {"gt.txt", "det.txt", "scene.json", "results.txt"} <= _names(scene)

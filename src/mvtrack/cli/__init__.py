@@ -131,7 +131,10 @@ def _click_message(exc: Exception) -> str:
         hint = f" (did you mean --{close[0]}?)" if close else ""
         return (f"{ctx.command_path}: no such option {option}{hint}; "
                 f"'{ctx.command_path} --help' lists the options")
-    return " ".join(exc.format_message().split())  # type: ignore[attr-defined]
+    message = " ".join(exc.format_message().split())  # type: ignore[attr-defined]
+    if message.startswith("No such command") and ctx is not None:
+        message += f" '{ctx.command_path} --help' lists the commands."
+    return message
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -103,9 +103,9 @@ def register(app: typer.Typer) -> None:
         out: Annotated[
             Path,
             typer.Option(help="Output folder: one sub-folder per video and batch.json. It "
-                         "holds this batch only: a folder with an earlier batch or run is "
-                         "replaced when this one finishes; a folder with other files is "
-                         "refused unless --force."),
+                         "holds this batch only: a folder with an earlier batch is replaced "
+                         "when this one finishes; a folder with anything else is refused "
+                         "unless --force."),
         ],
         workers: Annotated[
             int | None,
@@ -168,7 +168,7 @@ def register(app: typer.Typer) -> None:
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
             score_high=score_high, min_score=min_score, fps=fps, coasting=coasting,
         )
-        with run_folder(out, force=force, inputs=sources):
+        with run_folder(out, force=force, inputs=sources, kind="batch"):
             items = track_many(
                 sources, out, settings, workers=workers, scheduler=scheduler,
                 fps=settings.frame_rate, max_frames=max_frames,

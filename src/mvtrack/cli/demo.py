@@ -94,7 +94,7 @@ def register(app: typer.Typer) -> None:
             raise ValueError(f"--frames must be in 2..360, got {frames}")
         from mvtrack.io.outdir import run_folder
 
-        with run_folder(out, force=force):
+        with run_folder(out, force=force, kind="demo"):
             f = run_demo(out, frames=frames, seed=seed, video=not no_video)
         typer.echo(
             f"mvtrack demo: synthetic intersection (X5), {f['frames']} frames, "

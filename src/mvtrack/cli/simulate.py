@@ -57,7 +57,7 @@ def register(app: typer.Typer) -> None:
         if n is not None and n < 1:
             raise ValueError(f"--n must be at least 1, got {n}")
         sc = build(scene, seed=seed, frames=frames, n=n)
-        with run_folder(out, force=force):
+        with run_folder(out, force=force, kind="simulate"):
             written = [write_mot(out / "gt.txt", sc.gt_mot(), "gt")]
             if detections:
                 dets = detections_from_scene(sc, np.random.default_rng([seed, 1]))

@@ -112,7 +112,7 @@ def register(app: typer.Typer) -> None:
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
             score_high=score_high, min_score=min_score, fps=fps, coasting=coasting,
         )
-        with run_folder(out, force=force, inputs=[video]):
+        with run_folder(out, force=force, inputs=[video], kind="track"):
             run = track_video(video, out, settings, fps=settings.frame_rate,
                               max_frames=max_frames, snapshot=snapshot, flush=flush)
             tables = write_tables(run, out, settings, fps=fps)

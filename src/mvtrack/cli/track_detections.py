@@ -180,6 +180,7 @@ def register(app: typer.Typer) -> None:
 
 def parse_score_scale(text: str) -> str | tuple[float, float]:
     """``auto`` / ``prob`` as they are, ``"LO,HI"`` as a pair of numbers."""
+    from mvtrack.errors import InputError
     from mvtrack.tracking.scores import check_scale
 
     if "," in text:
@@ -187,9 +188,14 @@ def parse_score_scale(text: str) -> str | tuple[float, float]:
         try:
             pair = tuple(float(v) for v in parts)
         except ValueError:
-            raise ValueError(f"--score-scale LO,HI needs two numbers, got {text!r}") from None
-        return check_scale(pair)
-    return check_scale(text.strip())
+            raise InputError(f"--score-scale LO,HI needs two numbers, got {text!r}") from None
+        value: Any = pair
+    else:
+        value = text.strip()
+    try:
+        return check_scale(value)
+    except ValueError as exc:
+        raise InputError(f"--score-scale {text!r}: {exc}") from None
 
 
 def output_policy(config: TrackerConfig, coasting: bool) -> str:

@@ -7,13 +7,13 @@ runs (an old ``tracks.mp4``, ``report.html`` or snapshot beside a new ``results.
 folders:
 
 - a folder that does not exist, or is empty, is used as it is;
-- a folder that holds an earlier run (a run's summary, and only files mvtrack writes) is moved
-  aside when the new run starts and deleted when it has finished; if the new run fails before
-  it finishes (a bad setting found late, an unreadable file), its partial files are removed and
-  the earlier run is put back, untouched;
-- a folder that holds anything else (files mvtrack did not write) is refused with one line,
-  unless ``force``: then the run writes into it, its files replacing those of the same names
-  and the others kept.
+- a folder that holds an earlier run of the same command (a run's summary, and only files
+  mvtrack writes) is moved aside when the new run starts and deleted when it has finished;
+  if the new run fails before it finishes (a bad setting found late, an unreadable file),
+  its partial files are removed and the earlier run is put back, untouched;
+- a folder that holds anything else (files mvtrack did not write, or another command's run)
+  is refused with one line, unless ``force``: then the run writes into it, its files
+  replacing those of the same names and the others kept.
 
 Nothing is ever deleted that mvtrack did not write, and a folder that holds one of the run's
 inputs (``mvtrack track out/video.mp4 --out out``) is never moved.
@@ -50,9 +50,9 @@ OUTPUT_NAMES = frozenset({
 _PATTERNS = (re.compile(r"frame\d{5,}\.png"), re.compile(r"\..+\..*"))
 #: the file that says a folder is a run's, and keys it always has
 _MARKERS = {
-    "summary.json": ("source", "frames", "video_fps", "files"),
-    "scene.json": ("scene", "seed", "fps", "frames"),
     "batch.json": ("videos", "total", "settings"),
+    "scene.json": ("scene", "seed", "fps", "frames"),
+    "summary.json": ("source", "frames", "video_fps", "files"),
 }
 
 
@@ -60,7 +60,9 @@ def _is_output_name(name: str) -> bool:
     return name in OUTPUT_NAMES or any(p.fullmatch(name) for p in _PATTERNS)
 
 
-def _has_marker(folder: Path) -> bool:
+def run_kind(folder: Path) -> str | None:
+    """The command whose run ``folder`` holds, by its summary (``batch``, ``simulate``,
+    ``demo``, ``track``), or None."""
     for name, keys in _MARKERS.items():
         path = folder / name
         if not path.is_file():
@@ -70,8 +72,10 @@ def _has_marker(folder: Path) -> bool:
         except (OSError, UnicodeDecodeError, ValueError):
             continue
         if isinstance(data, dict) and all(k in data for k in keys):
-            return True
-    return False
+            if name == "summary.json":
+                return "demo" if (folder / "metrics.json").is_file() else "track"
+            return {"scene.json": "simulate", "batch.json": "batch"}[name]
+    return None
 
 
 #: the first line of a MOTChallenge results file as mvtrack writes it
@@ -107,7 +111,7 @@ def foreign_entries(folder: Path) -> list[str]:
     entries = sorted(folder.iterdir(), key=lambda p: p.name)
     if not entries:
         return []
-    if not _has_marker(folder):
+    if run_kind(folder) is None:
         return [p.name for p in entries]
     out = []
     for p in entries:
@@ -163,7 +167,7 @@ def _inside(path: Path, folder: Path) -> bool:
 @contextlib.contextmanager
 def run_folder(
     out: str | os.PathLike[str], *, force: bool = False, inputs: Iterable[str] = (),
-    option: str = "--out",
+    option: str = "--out", kind: str | None = None,
 ) -> Iterator[Path]:
     """The folder ``out``, holding only the files of the run in the ``with`` block.
 
@@ -182,6 +186,10 @@ def run_folder(
         aside; without ``force`` it is refused.
     option : str
         The option that named ``out``, for the messages.
+    kind : str, optional
+        The command of this run (``track``, ``demo``, ``simulate``, ``batch``): a folder
+        holding another command's run is not replaced (refused, or written into with
+        ``force``).
 
     Raises
     ------
@@ -201,13 +209,18 @@ def run_folder(
     aside: Path | None = None
     if any(out.iterdir()) and not held:
         foreign = foreign_entries(out)
+        found = None if foreign else run_kind(out)
         if foreign and not force:
             raise InputError(
-                f"{option} {out} is not empty and holds files mvtrack did not write "
+                f"{option} {out} is not empty and is not the folder of an earlier mvtrack run "
                 f"({_quote(foreign)}): choose a new or empty folder, or add --force to write "
                 "into it (files of the same names are replaced, the others kept)")
-        if not foreign:  # an earlier run: moved aside now, deleted once this one is done
-            aside = _move_aside(out, option)
+        if kind is not None and found not in (None, kind) and not force:
+            raise InputError(
+                f"{option} {out} holds a run of mvtrack {found}, not of mvtrack {kind}: "
+                "choose another folder, or add --force to write into it")
+        if not foreign and (kind is None or found == kind):  # an earlier run: moved aside
+            aside = _move_aside(out, option)  # now, deleted once this one is done
     fresh = aside is not None or not any(out.iterdir())
     try:
         yield out
