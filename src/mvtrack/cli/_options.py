@@ -64,9 +64,9 @@ Force = Annotated[
 
 #: what --out means for a command whose folder holds one run
 RUN_FOLDER_HELP = (
-    "Output folder. It holds this run only: a folder with an earlier run is replaced when "
-    "this one finishes (and kept as it was if this one fails); a folder with other files is "
-    "refused unless --force."
+    "Output folder. It holds this run only: a folder with an earlier run of this command is "
+    "replaced when this one finishes (and kept as it was if this one fails); a folder with "
+    "anything else is refused unless --force."
 )
 
 #: the tracker settings that have an option of their own, by TrackerConfig field

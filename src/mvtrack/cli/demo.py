@@ -76,8 +76,8 @@ def register(app: typer.Typer) -> None:
         out: Annotated[
             Path,
             typer.Option(help="Folder for the video, plots and results. It holds this run "
-                         "only: a folder with an earlier run is replaced when this one "
-                         "finishes; a folder with other files is refused unless --force."),
+                         "only: a folder with an earlier demo is replaced when this one "
+                         "finishes; a folder with anything else is refused unless --force."),
         ] = Path("mvtrack-demo"),
         frames: Annotated[
             int | None, typer.Option(help="Use only the first N of the 360 frames.")

@@ -90,7 +90,8 @@ def register(app: typer.Typer) -> None:
 
         --out holds one run: rerun into the same folder and the earlier run's files (video,
         snapshots, report) are replaced as a whole once the new run has finished; a folder
-        holding files mvtrack did not write is refused unless --force.
+        holding anything else (other files, another command's run) is refused unless
+        --force.
         """
         from mvtrack.cli import _signals
         from mvtrack.errors import InputError
