@@ -253,3 +253,21 @@ def test_the_settings_pages_are_linked_from_the_help(capsys) -> None:
     assert main(["track", "--help"]) == 0
     assert "docs/config.md" in " ".join(capsys.readouterr().out.split())
     assert (DOCS / "config.md").exists() and (DOCS / "other-trackers.md").exists()
+
+
+def test_toml_values_read_back() -> None:
+    """Every value a preset may hold is written as TOML that reads back as itself (None as
+    the settings file's "none")."""
+    import math
+    import tomllib
+
+    from mvtrack.config_show import toml_value
+
+    values = {"a": 0.3, "b": float("inf"), "c": -float("inf"), "d": 3, "e": True, "f": "x\"y",
+              "g": {"q": 0.05, "r": [1.0, 2.0]}, "h": (320.0, 240.0), "i": {}, "j": 1e-12}
+    text = "\n".join(f"{k} = {toml_value(v)}" for k, v in values.items())
+    back = tomllib.loads(text + "\nn = " + toml_value(float("nan")) + "\nz = "
+                        + toml_value(None))
+    for k, v in values.items():
+        assert back[k] == (list(v) if isinstance(v, tuple) else v), k
+    assert math.isnan(back["n"]) and back["z"] == "none"
