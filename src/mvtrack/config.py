@@ -6,6 +6,7 @@ over the file::
     [tracker]                 # preset, then any field of mvtrack.tracking.TrackerConfig
     preset = "paper1"         # "default", "paper1" or "paper2"
     predictor = "rls"
+    fps = 10                  # the source's frame rate, as --fps (the option wins)
     gate = 10.0
     birth_iou = "none"        # TOML has no null: "none" unsets a field (turns a rule off)
 
@@ -32,18 +33,26 @@ over the file::
 With an ``[analytics]`` table, ``mvtrack track`` also writes ``counts.csv``, ``movements.csv``,
 ``speeds.csv`` and ``tracks.csv`` beside ``results.txt`` (see ``docs/analytics-example.toml``).
 
-An unknown table or key is an :class:`~mvtrack.errors.InputError` naming the file and key, so a
-misspelt setting never passes silently. Tracker keys are checked against ``TrackerConfig``'s
-fields, detector and template keys against the constructor of the front end / template bank
-when those are built (:mod:`mvtrack.video.build`).
+``mvtrack config --show`` prints every setting with its default (:func:`default_toml`);
+``docs/config.md`` explains the file.
+
+An unknown table or key, or a value of the wrong type or out of range, is an
+:class:`~mvtrack.errors.InputError` of one line naming the file and the key (``scene.toml:
+tracker.max_coast must be ...``), so a misspelt setting never passes silently. Tracker keys are
+checked against ``TrackerConfig``'s fields and by building the tracker once; detector and
+template keys against the parameters (and their annotated types) of the front end's and the
+template bank's constructors.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 import os
+import re
 import tomllib
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -114,7 +123,8 @@ def relink_settings(table: dict[str, Any] | None) -> RelinkSettings:
                          f"{', '.join(sorted(known))})")
     return RelinkSettings(**table)
 
-_TABLES: dict[str, tuple[str, ...]] = {
+#: the tables of a settings file, and the keys of those whose keys are fixed
+TABLES: dict[str, tuple[str, ...]] = {
     "tracker": (),  # checked against TrackerConfig fields (plus "preset")
     "detector": (),  # "name" plus the detector's parameters
     "templates": (),  # "enabled" plus TemplateBank parameters
@@ -152,6 +162,9 @@ class RunSettings:
     relink : RelinkSettings
         Whether and how a new track continues one that ended behind an occluder
         (:mod:`mvtrack.video.relink`).
+    coasting : bool
+        Also write the rows of coasting tracks (no detection, up to the tracker's
+        ``coast_output``) to ``results.txt``: ``--coasting``, no key in the file.
     """
 
     tracker: dict[str, Any] = field(default_factory=dict)
@@ -164,6 +177,7 @@ class RunSettings:
     gates: bool = True
     analytics: dict[str, Any] | None = None
     relink: RelinkSettings = field(default_factory=RelinkSettings)
+    coasting: bool = False
 
     def with_overrides(self, **tracker_overrides: Any) -> RunSettings:
         """A copy with the non-None ``tracker_overrides`` (CLI options) applied."""
@@ -171,9 +185,148 @@ class RunSettings:
         tracker.update({k: v for k, v in tracker_overrides.items() if v is not None})
         return dataclasses.replace(self, tracker=tracker)
 
+    @property
+    def frame_rate(self) -> float | None:
+        """The frame rate the settings give the run (``[tracker] fps``, or ``--fps``), or None
+        for the source's own."""
+        fps = self.tracker.get("fps")
+        return float(fps) if _is_number(fps) else None
+
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (for ``summary.json``)."""
         return dataclasses.asdict(self)
+
+
+#: the highest frame rate a source may be given, frames per second (a fast camera)
+MAX_FPS = 1000.0
+
+
+def _is_number(value: Any) -> bool:
+    return (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value))
+
+
+def check_fps(name: str, value: Any) -> float:
+    """``value`` as a frame rate, or an :class:`InputError` naming the setting ``name``
+    (``--fps``, ``scene.toml: tracker.fps``): a finite number in (0, :data:`MAX_FPS`]."""
+    if not _is_number(value) or not 0.0 < value <= MAX_FPS:
+        raise InputError(f"{name} must be a frame rate above 0 and at most {MAX_FPS:g} frames "
+                         f"per second, got {value!r}")
+    return float(value)
+
+
+def tracker_error(exc: Exception, name_of: Callable[[str], str], context: str) -> InputError:
+    """The tracker's message of ``exc`` with each ``TrackerConfig.<field>`` named as the user
+    gave the setting (``name_of(field)``: an option or a file's key); a message that names
+    no field is prefixed with ``context``."""
+    text = str(exc).removeprefix("tracker settings: ")
+    named, n = re.subn(r"TrackerConfig\.(\w+)", lambda m: name_of(m.group(1)), text)
+    return InputError(named if n else f"{context}: {text}")
+
+
+def check_tracker(tracker: Mapping[str, Any], name_of: Callable[[str], str],
+                  context: str = "tracker settings") -> None:
+    """Build the tracker of the ``[tracker]`` settings ``tracker`` once, so a bad value stops
+    the command before any work, in one line naming the setting as the user gave it.
+
+    Parameters
+    ----------
+    tracker : mapping
+        ``preset`` and ``TrackerConfig`` fields (``"none"`` for None), as in
+        :attr:`RunSettings.tracker`.
+    name_of : callable
+        The user's name of a field: ``"--score-high"``, ``"scene.toml: tracker.gate"``.
+    context : str
+        Prefix of a message that names no field.
+
+    Raises
+    ------
+    InputError
+        An unknown predictor, distance, assignment rule or preset, a bad frame rate, or a
+        value ``TrackerConfig`` refuses.
+    """
+    from mvtrack.registry import ASSIGN_RULES, DISTANCES, PREDICTORS
+    from mvtrack.tracking import PRESETS
+    from mvtrack.video.build import build_tracker
+
+    for key, known, what in (("preset", PRESETS, "tracker preset"),
+                             ("predictor", PREDICTORS, "predictor"),
+                             ("distance", DISTANCES, "distance"),
+                             ("assign", ASSIGN_RULES, "assignment rule")):
+        value = tracker.get(key)
+        if value is not None and (not isinstance(value, str) or value not in known):
+            raise InputError(f"{name_of(key)} {value!r} is not a {what} (choose one of: "
+                             f"{', '.join(known)})")
+    if "fps" in tracker:
+        check_fps(name_of("fps"), tracker["fps"])
+    try:
+        build_tracker(RunSettings(tracker=dict(tracker)), 30.0)
+    except (TypeError, ValueError) as exc:
+        raise tracker_error(exc, name_of, context) from None
+
+
+def _signature_types(targets: list[Callable[..., Any]]) -> dict[str, str]:
+    """Parameter name -> annotation text of the keyword parameters of ``targets``."""
+    types: dict[str, str] = {}
+    for target in targets:
+        for p in inspect.signature(target).parameters.values():
+            if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL) and isinstance(p.annotation, str):
+                types.setdefault(p.name, p.annotation)
+    return types
+
+
+def detector_signatures(name: str) -> list[Callable[..., Any]]:
+    """The constructors whose parameters a ``[detector]`` table of front end ``name`` sets."""
+    from mvtrack.registry import DETECTORS, load
+
+    cls = load(DETECTORS[name])
+    targets = [cls]
+    if any(p.kind == p.VAR_KEYWORD for p in inspect.signature(cls).parameters.values()):
+        from mvtrack.detection.blobs import BlobExtractor  # a front end's **blob parameters
+
+        targets.append(BlobExtractor)
+    return targets
+
+
+def template_signatures() -> list[Callable[..., Any]]:
+    """The constructors whose parameters a ``[templates]`` table sets."""
+    from mvtrack.detection.template import TemplateBank
+    from mvtrack.video.rescue import StoppedVehicleRescuer
+
+    return [TemplateBank, StoppedVehicleRescuer.__init__]
+
+
+_TYPE_WORDS = {"float": "a number", "int": "an integer", "bool": "true or false",
+               "str": "a string"}
+
+
+def _check_params(path: Path, table: str, params: Mapping[str, Any],
+                  targets: list[Callable[..., Any]]) -> dict[str, Any]:
+    """``params`` of a ``[detector]`` / ``[templates]`` table, each value checked against the
+    annotation of the constructor parameter it sets, ``"none"`` read as None where the
+    parameter takes None (unknown keys are left to the constructor, whose message names
+    them)."""
+    types = _signature_types(targets)
+    out = dict(params)
+    for key, value in params.items():
+        kinds = [k.strip() for k in types.get(key, "").split("|")]
+        if "None" in kinds and isinstance(value, str) and value.lower() == "none":
+            out[key] = None
+            continue
+        wanted = [k for k in kinds if k in _TYPE_WORDS]
+        if not wanted or len(wanted) < len([k for k in kinds if k != "None"]):
+            continue  # a type this check does not know
+        ok = ((isinstance(value, bool) and "bool" in wanted)
+              or (not isinstance(value, bool) and (
+                  (isinstance(value, int) and ("int" in wanted or "float" in wanted))
+                  or (isinstance(value, float) and "float" in wanted and math.isfinite(value))
+                  or (isinstance(value, str) and "str" in wanted))))
+        if not ok:
+            words = " or ".join(_TYPE_WORDS[k] for k in wanted)
+            if "None" in kinds:
+                words += ' or "none"'
+            raise InputError(f"{path}: {table}.{key} must be {words}, got {value!r}")
+    return out
 
 
 def _tracker_fields() -> set[str] | None:
@@ -220,8 +373,9 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
         raise InputError(f"cannot read config file {path}: {exc}") from None
 
     for key, value in data.items():
-        if key not in _TABLES:
-            raise _unknown(path, key, tuple(_TABLES))
+        if key not in TABLES:
+            raise InputError(f"{path}: unknown table [{key}] (known: "
+                             f"{', '.join(sorted(TABLES))})")
         if not isinstance(value, dict):
             raise InputError(f"{path}: {key} must be a table ([{key}]), got {value!r}")
 
@@ -233,8 +387,10 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
                 raise _unknown(path, f"tracker.{key}", known | {"preset"})
     if "preset" in tracker:
         _check_type(path, "tracker.preset", tracker["preset"], str)
-    if "gate" in tracker:
+    if "gate" in tracker and not (isinstance(tracker["gate"], str)
+                                  and tracker["gate"].lower() == "none"):
         _check_type(path, "tracker.gate", tracker["gate"], (int, float))
+    check_tracker(tracker, lambda key: f"{path}: tracker.{key}", f"{path}: [tracker]")
 
     detector_table = dict(data.get("detector", {}))
     name = detector_table.pop("name", RunSettings.detector)
@@ -245,14 +401,17 @@ def load_config(path: str | os.PathLike[str]) -> RunSettings:
             f"{', '.join(DETECTORS)})"
         )
 
+    detector_table = _check_params(path, "detector", detector_table, detector_signatures(name))
+
     template_table = dict(data.get("templates", {}))
     enabled = template_table.pop("enabled", True)
     _check_type(path, "templates.enabled", enabled, bool)
+    template_table = _check_params(path, "templates", template_table, template_signatures())
 
     video_table = data.get("video", {})
     for key in video_table:
-        if key not in _TABLES["video"]:
-            raise _unknown(path, f"video.{key}", _TABLES["video"])
+        if key not in TABLES["video"]:
+            raise _unknown(path, f"video.{key}", TABLES["video"])
     write = video_table.get("write", True)
     trail = video_table.get("trail", RunSettings.trail)
     gates = video_table.get("gates", True)

@@ -279,3 +279,111 @@ def test_live_counts_end_at_the_totals_of_counts_csv() -> None:
     assert shown[33] == (0, 1)  # track 5 crossed at frame 32, its 3rd row: held ...
     assert shown[34] == (0, 2)  # ... until its 5th row, frame 34
     assert shown.index((1, 2)) == 40  # track 2: x = 95 - 1.2 k < 48 from k = 40
+
+
+# --------------------------------------------------- analyze / report without --config
+def _walkers_folder(folder: Path) -> Path:
+    """A run folder of two walkers on a 200×100 image: track 1 enters at the left border and
+    leaves at the right one, track 2 enters at the top and leaves at the bottom."""
+    import json
+
+    folder.mkdir()
+    rows = []
+    for f in range(40):
+        rows.append(f"{f + 1},1,{2 + 5 * f - 4},{50 - 8},8,16,1,-1,-1,-1")
+    for f in range(20):
+        rows.append(f"{f + 1},2,{60 - 4},{1 + 5 * f - 8},8,16,1,-1,-1,-1")
+    (folder / "results.txt").write_text("\n".join(sorted(rows, key=lambda r: int(
+        r.split(",")[0]))) + "\n")
+    (folder / "summary.json").write_text(json.dumps({
+        "source": "walkers", "frames": 40, "video_fps": 10.0, "size": [200, 100],
+        "files": {}}))
+    return folder
+
+
+def _counts(folder: Path) -> dict[str, int]:
+    counts = read_table(folder / "counts.csv")
+    return {f"{n}:{d}": int(c) for n, d, c in zip(counts["name"], counts["direction"],
+                                                  counts["count"], strict=True)}
+
+
+def _movements(folder: Path) -> dict[str, int]:
+    mv = read_table(folder / "movements.csv")
+    return {f"{o}->{d}": int(c) for o, d, c in zip(mv["origin"], mv["destination"],
+                                                   mv["count"], strict=True) if int(c)}
+
+
+def test_analyze_without_config_counts_through_the_default_geometry(tmp_path: Path,
+                                                                    capsys) -> None:
+    out = _walkers_folder(tmp_path / "run")
+    assert main(["analyze", str(out)]) == 0
+    text = capsys.readouterr().out
+    first = text.splitlines()[0]
+    assert first.startswith("analytics settings: no --config")
+    assert "approaches at the four borders" in first and "200×100" in first
+    assert _movements(out) == {"west->east": 1, "north->south": 1}
+    assert _counts(out) == {"vertical:westbound": 0, "vertical:eastbound": 1,
+                            "horizontal:southbound": 1, "horizontal:northbound": 0}
+    assert (out / "analytics.json").exists()
+
+
+def test_analyze_without_config_redoes_the_earlier_analysis(tmp_path: Path, capsys) -> None:
+    """Counts made with a scene's lines are never replaced by others when the command is run
+    again without --config: the folder's analytics.json says which settings made them."""
+    out = _walkers_folder(tmp_path / "run")
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text("[analytics]\n[analytics.lines.gate]\npoints = [[100, 0], [100, 100]]\n"
+                   'labels = ["out", "in"]\n')
+    assert main(["report", str(out), "--config", str(cfg)]) == 0
+    before = (out / "counts.csv").read_text()
+    assert _counts(out) == {"gate:out": 0, "gate:in": 1}
+    capsys.readouterr()
+    assert main(["report", str(out)]) == 0
+    assert capsys.readouterr().out.startswith(
+        f"analytics settings: those of the earlier analysis (analytics.json: the [analytics] "
+        f"table of {cfg})")
+    assert (out / "counts.csv").read_text() == before
+
+
+def test_analyze_uses_the_table_the_run_was_tracked_with(tmp_path: Path, capsys) -> None:
+    video = box_video(tmp_path / "box.avi", n=40)
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text(SCENE)
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--no-video",
+                 "--config", str(cfg)]) == 0
+    tracked = (out / "counts.csv").read_text()
+    capsys.readouterr()
+    assert main(["analyze", str(out)]) == 0
+    assert "the [analytics] table the run was tracked with" in capsys.readouterr().out
+    assert (out / "counts.csv").read_text() == tracked
+
+
+def test_analyze_refuses_when_there_is_nothing_to_count_on(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "results.txt").write_text("1,1,10,10,8,16,1,-1,-1,-1\n")
+    (out / "summary.json").write_text('{"frames": 1, "video_fps": 10}')  # no image size
+    for command in ("analyze", "report"):
+        assert main([command, str(out)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and "nothing to count on" in err and "--config" in err
+        assert sorted(p.name for p in out.iterdir()) == ["results.txt", "summary.json"]
+
+
+def test_the_report_says_tracks_not_vehicles(tmp_path: Path, capsys) -> None:
+    """A report on people: the movement colour bar and the speed table count tracks."""
+    from mvtrack.analytics import analyse_folder
+    from mvtrack.analytics.defaults import choose_settings
+    from mvtrack.analytics.report import od_figure
+
+    out = _walkers_folder(tmp_path / "run")
+    cfg = tmp_path / "scene.toml"
+    cfg.write_text("[analytics.calibration]\nmetres_per_pixel = 0.02\n")
+    assert main(["report", str(out), "--config", str(cfg)]) == 0
+    html = (out / "report.html").read_text()
+    assert "vehicles" not in html and "<th>tracks</th>" in html
+    assert "tracks" in read_table(out / "speeds.csv")
+    result = analyse_folder(out, choose_settings(out).settings)
+    fig = od_figure(result)
+    assert fig.axes[-1].get_ylabel() == "tracks"

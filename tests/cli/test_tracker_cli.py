@@ -104,9 +104,9 @@ def test_options_reach_the_tracker(tmp_path, capsys) -> None:
     args = ["track-detections", str(det), "--out", str(tmp_path / "o"), "--preset", "paper1",
             "--predictor", "rls", "--fps", "15"]
     assert main(args) == 0
-    assert "(rls, euclidean, nearest;" in capsys.readouterr().out
+    assert "(rls, euclidean, nearest, 15 fps;" in capsys.readouterr().out
     assert main([*args[:-4], "--distance", "mahalanobis", "--gate", "20"]) == 0
-    assert "(kalman-ca, mahalanobis, nearest;" in capsys.readouterr().out
+    assert "(kalman-ca, mahalanobis, nearest, 30 fps;" in capsys.readouterr().out
 
 
 def test_bad_file_and_bad_values_are_one_line_errors(tmp_path, capsys) -> None:
@@ -118,7 +118,7 @@ def test_bad_file_and_bad_values_are_one_line_errors(tmp_path, capsys) -> None:
     _det_file(det)
     assert main(["track-detections", str(det), "--out", str(tmp_path / "o"), "--fps", "0"]) == 2
     assert "fps" in capsys.readouterr().err
-    for value, says in (("abc", "a number or 'none'"), ("5", "low_birth_iou")):
+    for value, says in (("abc", "a number or 'none'"), ("5", "--low-birth-iou must be")):
         assert main(["track-detections", str(det), "--out", str(tmp_path / "o"),
                      "--low-birth-iou", value]) == 2
         err = capsys.readouterr().err.strip()

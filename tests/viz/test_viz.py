@@ -201,3 +201,62 @@ def test_outer_gate_circle_is_drawn_dimmer_and_wider() -> None:
     assert r.size > 50 and np.median(r) == pytest.approx(30.0, abs=1.0)
     inner = np.nonzero(np.abs(out.astype(int) - GATE_COLOR).sum(axis=2) < 60)
     assert np.median(np.hypot(inner[1] - 50, inner[0] - 50)) == pytest.approx(10.0, abs=1.0)
+
+
+# ------------------------------------------------------------ labels readable in the frame
+def _dark_boxes(img: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """x0, y0, x1, y1 (inclusive) of each connected patch of the labels' dark fill."""
+    dark = (img == 20).all(axis=2).astype(np.uint8)
+    _, _, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
+    return [(x, y, x + w - 1, y + h - 1) for x, y, w, h, area in stats[1:] if area > 20]
+
+
+def _inside(a: tuple[int, ...], b: tuple[int, ...]) -> bool:
+    return a[0] >= b[0] and a[1] >= b[1] and a[2] <= b[2] and a[3] <= b[3]
+
+
+def test_place_frame_labels_never_overlap_and_stay_in_the_frame() -> None:
+    from mvtrack.viz.labels import place_frame_labels
+
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        k = int(rng.integers(1, 12))
+        xy = rng.uniform([-10, -10], [330, 250], size=(k, 2))
+        wh = rng.uniform(6, 40, size=(k, 2))
+        boxes = np.rint(np.concatenate([xy - wh / 2, xy + wh / 2], axis=1)).astype(np.int64)
+        sizes = rng.integers([12, 10], [30, 14], size=(k, 2))
+        banner = np.array([[2, 2, 120, 16], [2, 17, 170, 31]])
+        corner = place_frame_labels(boxes, sizes, (320, 240), banner)
+        rect = np.concatenate([corner, corner + sizes], axis=1)
+        assert (rect[:, :2] >= 0).all() and (rect[:, 2] <= 320).all() and (rect[:, 3] <= 240).all()
+        if k <= 4:  # few labels always find a free place around a box
+            allr = np.vstack([banner, rect])
+            for i in range(2, len(allr)):
+                for j in range(i):
+                    apart = (allr[i, 0] > allr[j, 2] or allr[j, 0] > allr[i, 2]
+                             or allr[i, 1] > allr[j, 3] or allr[j, 1] > allr[i, 3])
+                    assert apart, (i, j, allr)
+
+
+def test_ids_near_the_header_and_side_by_side_stay_readable() -> None:
+    """A box under the frame's header and two boxes side by side: every ID gets its own dark
+    label, apart from the header and from each other, with its digits on it."""
+    img = np.full((240, 320, 3), 120, np.uint8)
+    tracks = _frame(5, [9, 4, 5], [int(TrackState.CONFIRMED)] * 3,
+                    [[60, 30], [200, 120], [212, 120]], wh=(10, 24))
+    text = ["frame 5  tracks 3", "kalman-cv | euclidean | optimal"]
+    out = annotate_frame(img, tracks, text=text)
+    boxes = _dark_boxes(out)
+    header = [b for b in boxes if b[0] <= 4]
+    labels = [b for b in boxes if b[0] > 4]
+    assert len(labels) == 3, boxes
+    b, g, r = (out[..., c].astype(int) for c in range(3))
+    green = (g > 100) & (g > r + 40) & (g > b + 40)  # the confirmed colour, anti-aliased
+    for lab in labels:
+        x0, y0, x1, y1 = lab
+        assert green[y0 : y1 + 1, x0 : x1 + 1].sum() >= 5  # the digits are drawn on it
+        for h in header:
+            assert lab[0] > h[2] or lab[1] > h[3] or lab[3] < h[1]
+    # the label of track 9 (box x 55..65, y 18..42) is not under the header: below its box
+    nine = [b for b in labels if b[0] < 100]
+    assert len(nine) == 1 and nine[0][1] > max(h[3] for h in header)

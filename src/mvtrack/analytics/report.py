@@ -62,9 +62,19 @@ def od_figure(result: AnalyticsResult) -> Any:
         for j in range(m.shape[1]):
             ax.text(j, i, str(m[i, j]), ha="center", va="center",
                     color="white" if m[i, j] < m.max() / 2 else "black")
-    fig.colorbar(im, ax=ax, label="vehicles")
+    fig.colorbar(im, ax=ax, label=_objects(result))
     ax.set_title("turning movements (complete + completed)")
     return fig
+
+
+def _objects(result: AnalyticsResult) -> str:
+    """What the counted tracks are, for a label: ``tracks``, or ``tracks of class 2`` when
+    every counted track has that class (people, vehicles or anything else alike)."""
+    t = result.tracks
+    counted = t["counted"].astype(bool) if t["counted"].size else np.zeros(0, bool)
+    classes = {str(c) for c in t["class"][counted]}
+    return f"tracks of class {classes.pop()}" if len(classes) == 1 and "" not in classes \
+        else "tracks"
 
 
 def counts_figure(result: AnalyticsResult) -> Any:
@@ -260,7 +270,7 @@ def render_report(result: AnalyticsResult, folder: str | os.PathLike[str],
                           "completed"])]
     if result.speeds["interval"].size:
         parts += ["<h2>Speeds per interval</h2>",
-                  _table(result.speeds, ["interval_start_s", "class", "vehicles", "mean_kmh",
+                  _table(result.speeds, ["interval_start_s", "class", "tracks", "mean_kmh",
                                          "median_kmh", "p85_kmh", "max_kmh",
                                          "stopped_share"])]
     parts.append("</body></html>\n")

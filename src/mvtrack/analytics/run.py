@@ -225,7 +225,7 @@ def analyse(
 
     # ------------------------------------------------------------------ speeds per interval
     srows: dict[str, list[Any]] = {k: [] for k in (
-        "interval", "interval_start_s", "interval_end_s", "class", "vehicles", "samples",
+        "interval", "interval_start_s", "interval_end_s", "class", "tracks", "samples",
         "mean_kmh", "median_kmh", "p85_kmh", "max_kmh", "stopped_share")}
     if speeds is not None and len(pts):
         sp = speeds.speed[counted]
@@ -241,13 +241,13 @@ def analyse(
             per = group_stats(moving, inv, uk.size)["mean"]
             k_iv = uk // (t_n + 1)
             s = group_stats(per, k_iv, n_int)
-            veh = np.bincount(k_iv, minlength=n_int)
+            n_tracks = np.bincount(k_iv, minlength=n_int)
             samples = np.bincount(iv[sel], minlength=n_int)
             stopped = np.bincount(iv[sel], stp[sel], n_int) / np.maximum(samples, 1)
             lo, hi = _bounds(ivals, T)
             for key_, val in (("interval", ivals), ("interval_start_s", lo),
                               ("interval_end_s", hi), ("class", [cname] * n_int),
-                              ("vehicles", veh), ("samples", samples), ("mean_kmh", s["mean"]),
+                              ("tracks", n_tracks), ("samples", samples), ("mean_kmh", s["mean"]),
                               ("median_kmh", s["median"]), ("p85_kmh", s["p85"]),
                               ("max_kmh", s["max"]), ("stopped_share", stopped)):
                 srows[key_].extend(np.asarray(val).tolist())

@@ -24,10 +24,11 @@ from mvtrack.analytics.movements import MovementSettings
 from mvtrack.analytics.speed import VELOCITIES, SpeedSettings
 from mvtrack.analytics.tracks import ANCHORS
 from mvtrack.analytics.zones import Zone
+from mvtrack.config import TABLES
 from mvtrack.errors import InputError
 
-#: tables the tracker reads from the same file
-ENGINE_TABLES = ("tracker", "detector", "templates", "video")
+#: tables the tracker reads from the same file (mvtrack.config)
+ENGINE_TABLES = tuple(t for t in TABLES if t != "analytics")
 _TOP = ("interval", "fps", "anchor", "min_frames", "calibration", "speed", "movements",
         "lines", "zones", "approaches")
 _UNITS = {"s": 1.0, "sec": 1.0, "min": 60.0, "h": 3600.0}
@@ -242,14 +243,14 @@ def settings_from_dict(data: dict[str, Any], path: str | os.PathLike[str] = "<se
     return AnalyticsSettings(**kw)
 
 
-def load_settings(path: str | os.PathLike[str]) -> AnalyticsSettings:
-    """Read the ``[analytics]`` table of a TOML file (module docstring).
+def read_table(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The ``[analytics]`` table of a TOML file (empty when it has none), the other tables
+    checked to be the tracker's.
 
     Raises
     ------
     InputError
-        Missing or unreadable file, invalid TOML, an unknown table or key, a wrong type or
-        value (one line naming the file and the key).
+        Missing or unreadable file, invalid TOML, an unknown table (one line).
     """
     path = Path(path)
     try:
@@ -267,4 +268,19 @@ def load_settings(path: str | os.PathLike[str]) -> AnalyticsSettings:
         if key != "analytics" and key not in ENGINE_TABLES:
             raise InputError(f"{path}: unknown table {key!r} (known: analytics, "
                              f"{', '.join(ENGINE_TABLES)})")
-    return settings_from_dict(data.get("analytics", {}), path)
+    table = data.get("analytics", {})
+    if not isinstance(table, dict):
+        raise InputError(f"{path}: analytics must be a table ([analytics]), got {table!r}")
+    return table
+
+
+def load_settings(path: str | os.PathLike[str]) -> AnalyticsSettings:
+    """Read the ``[analytics]`` table of a TOML file (module docstring).
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, invalid TOML, an unknown table or key, a wrong type or
+        value (one line naming the file and the key).
+    """
+    return settings_from_dict(read_table(path), path)

@@ -17,6 +17,7 @@ import typer
 from mvtrack.cli import (
     _signals,
     batch,
+    config,
     demo,
     evaluate,
     experiment,
@@ -64,7 +65,9 @@ def _root(
         set_verbose()
 
 
-for _module in (demo, track, track_detections, batch, evaluate, simulate, experiment, report):
+for _module in (
+    demo, track, track_detections, batch, evaluate, simulate, experiment, report, config,
+):
     _module.register(app)
 
 # Typer ships its own copy of Click; find its exception classes through a public name.
@@ -95,7 +98,10 @@ def _run(argv: list[str] | None) -> int:
         with one_line_warnings():
             result = command.main(args=argv, prog_name="mvtrack", standalone_mode=False)
     except _CLICK_ERROR as exc:
-        print(f"error: {exc.format_message()}", file=sys.stderr)  # type: ignore[attr-defined]
+        if type(exc).__name__ == "NoArgsIsHelpError":  # bare `mvtrack`: the help, exit 0
+            print(exc.format_message())  # type: ignore[attr-defined]
+            return 0
+        print(f"error: {_click_message(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return _signals.EXIT_INTERRUPTED
@@ -109,6 +115,26 @@ def _run(argv: list[str] | None) -> int:
             return 2
         raise
     return int(result) if isinstance(result, int) else 0
+
+
+def _click_message(exc: Exception) -> str:
+    """Click's message of a usage error, in one line; an unknown option names the command,
+    suggests only a close match and points at the command's --help."""
+    option = getattr(exc, "option_name", None)
+    ctx = getattr(exc, "ctx", None)
+    if type(exc).__name__ == "NoSuchOption" and option and ctx is not None:
+        import difflib
+
+        known = sorted(getattr(exc, "possibilities", None) or [])
+        close = difflib.get_close_matches(option.lstrip("-"), [k.lstrip("-") for k in known],
+                                          n=1, cutoff=0.75)
+        hint = f" (did you mean --{close[0]}?)" if close else ""
+        return (f"{ctx.command_path}: no such option {option}{hint}; "
+                f"'{ctx.command_path} --help' lists the options")
+    message = " ".join(exc.format_message().split())  # type: ignore[attr-defined]
+    if message.startswith("No such command") and ctx is not None:
+        message += f" '{ctx.command_path} --help' lists the commands."
+    return message
 
 
 if __name__ == "__main__":  # pragma: no cover

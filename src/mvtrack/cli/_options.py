@@ -37,12 +37,65 @@ DetectorName = Annotated[
     str | None, typer.Option(help=f"{one_of(DETECTORS, DEFAULT_DETECTOR)}.")
 ]
 ConfigFile = Annotated[
-    Path | None, typer.Option(help="TOML settings file (see mvtrack.config).")
+    Path | None,
+    typer.Option(help="TOML settings file; every table and key is in docs/config.md, and "
+                 "'mvtrack config --show' prints them all with their defaults."),
 ]
 NoVideo = Annotated[bool, typer.Option("--no-video", help="Skip the annotated MP4 (faster).")]
 NoTemplates = Annotated[
     bool, typer.Option("--no-templates", help="No template matching for stopped vehicles.")
 ]
+ScoreHigh = Annotated[
+    float | None,
+    typer.Option(help="Calibrated score in [0, 1] from which a detection may start a track and "
+                 "is matched first; lower ones only extend tracks (ByteTrack's track_thresh; "
+                 "default: the preset's).", show_default=False),
+]
+MinScore = Annotated[
+    float | None,
+    typer.Option(help="Calibrated score in [0, 1] below which detections are dropped "
+                 "(default: the preset's).", show_default=False),
+]
+Force = Annotated[
+    bool,
+    typer.Option("--force", help="Write into an --out folder that holds files mvtrack did not "
+                 "write (files of the same names are replaced, the others kept)."),
+]
+
+#: what --out means for a command whose folder holds one run
+RUN_FOLDER_HELP = (
+    "Output folder. It holds this run only: a folder with an earlier run of this command is "
+    "replaced when this one finishes (and kept as it was if this one fails); a folder with "
+    "anything else is refused unless --force."
+)
+
+#: the tracker settings that have an option of their own, by TrackerConfig field
+TRACKER_OPTIONS = {
+    "preset": "--preset", "predictor": "--predictor", "distance": "--distance",
+    "assign": "--assign", "gate": "--gate", "fps": "--fps", "score_high": "--score-high",
+    "min_score": "--min-score", "score_scale": "--score-scale",
+    "birth_iou": "--birth-iou",
+}
+
+
+def check_choice(option: str, value: str | None, known: object) -> None:
+    """Refuse a ``value`` of ``option`` that is not one of ``known`` (one line)."""
+    from mvtrack.errors import InputError
+
+    if value is not None and value not in known:  # type: ignore[operator]
+        raise InputError(f"{option} {value!r} is not one of: "
+                         f"{', '.join(known)}")  # type: ignore[call-overload]
+
+
+def tracker_names(given: set[str], config: Path | None):  # type: ignore[no-untyped-def]
+    """The user's name of each tracker setting: its option when given on the command line,
+    else the key of the settings file."""
+    def name_of(field: str) -> str:
+        if field in given:
+            return TRACKER_OPTIONS.get(field, f"--{field.replace('_', '-')}")
+        return f"{config}: tracker.{field}" if config is not None else f"tracker.{field}"
+
+    return name_of
 
 
 def parse_gate(text: str | None) -> float | None:
@@ -87,24 +140,40 @@ def video_settings(
     detector: str | None,
     no_video: bool,
     no_templates: bool,
+    score_high: float | None = None,
+    min_score: float | None = None,
+    fps: float | None = None,
+    coasting: bool = False,
 ) -> RunSettings:
     """The :class:`~mvtrack.config.RunSettings` the command-line options ask for.
 
-    The TOML file (if any) first, then each option that was given on top of it.
+    The TOML file (if any) first, then each option that was given on top of it. Every value
+    is checked here, before any work: the tracker is built once (at the run's frame rate if
+    one is given), and a message names the option or the file's key that is wrong.
 
     Raises
     ------
     InputError
-        A bad settings file, an unknown detector or a bad gate (one line).
+        A bad settings file, an unknown detector, predictor, distance or assignment rule, a
+        bad gate, score or frame rate (one line).
     """
-    from mvtrack.config import RunSettings, load_config
+    from mvtrack.config import RunSettings, check_fps, check_tracker, load_config
     from mvtrack.errors import InputError
 
     settings = load_config(config) if config is not None else RunSettings()
-    settings = settings.with_overrides(
-        preset=preset, predictor=predictor, gate=parse_gate(gate), distance=distance,
-        assign=assign,
-    )
+    check_choice("--preset", preset, _presets())
+    check_choice("--predictor", predictor, PREDICTORS)
+    check_choice("--distance", distance, DISTANCES)
+    check_choice("--assign", assign, ASSIGN_RULES)
+    if fps is not None:
+        check_fps("--fps", fps)
+    options = {"preset": preset, "predictor": predictor, "gate": parse_gate(gate),
+               "distance": distance, "assign": assign, "score_high": score_high,
+               "min_score": min_score, "fps": fps}
+    given = {k for k, v in options.items() if v is not None}
+    settings = settings.with_overrides(**options)
+    if given:
+        check_tracker(settings.tracker, tracker_names(given, config))
     if detector is not None:
         if detector not in DETECTORS:
             raise InputError(
@@ -120,8 +189,42 @@ def video_settings(
             )
         settings = dataclasses.replace(settings, detector=detector,
                                        detector_params=settings.detector_params)
+    if settings.detector_params or settings.template_params:
+        _check_parts(settings, config)
     if no_video:
         settings = dataclasses.replace(settings, video=False)
     if no_templates:
         settings = dataclasses.replace(settings, templates=False)
+    if coasting:
+        settings = dataclasses.replace(settings, coasting=True)
     return settings
+
+
+def _presets() -> tuple[str, ...]:
+    from mvtrack.tracking import PRESETS
+
+    return tuple(PRESETS)
+
+
+def _check_parts(settings: RunSettings, config: Path | None) -> None:
+    """Build the detector and the template bank of ``settings`` once (at the papers' image
+    size), so a bad parameter of the file stops the command before any work."""
+    from mvtrack.errors import InputError
+    from mvtrack.video import (
+        REFERENCE_SIZE,
+        build_detector,
+        build_rescuer,
+        build_tracker,
+        resolve_settings,
+    )
+
+    resolved = resolve_settings(settings, REFERENCE_SIZE)
+    try:
+        build_detector(resolved)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{config}: {exc}") from None
+    if settings.templates and settings.template_params:
+        try:
+            build_rescuer(resolved, build_tracker(resolved, settings.frame_rate or 30.0))
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{config}: {exc}") from None

@@ -14,11 +14,14 @@ from mvtrack.cli._options import (
     ConfigFile,
     DetectorName,
     Distance,
+    Force,
     Gate,
+    MinScore,
     NoTemplates,
     NoVideo,
     Predictor,
     Preset,
+    ScoreHigh,
     video_settings,
 )
 
@@ -98,7 +101,11 @@ def register(app: typer.Typer) -> None:
             ),
         ],
         out: Annotated[
-            Path, typer.Option(help="Output folder: one sub-folder per video and batch.json.")
+            Path,
+            typer.Option(help="Output folder: one sub-folder per video and batch.json. It "
+                         "holds this batch only: a folder with an earlier batch is replaced "
+                         "when this one finishes; a folder with anything else is refused "
+                         "unless --force."),
         ],
         workers: Annotated[
             int | None,
@@ -118,8 +125,16 @@ def register(app: typer.Typer) -> None:
         assign: Assign = None,
         detector: DetectorName = None,
         config: ConfigFile = None,
+        score_high: ScoreHigh = None,
+        min_score: MinScore = None,
+        coasting: Annotated[
+            bool,
+            typer.Option("--coasting/--no-coasting",
+                         help="Also write the rows of coasting tracks to each results.txt."),
+        ] = False,
         no_video: NoVideo = False,
         no_templates: NoTemplates = False,
+        force: Force = False,
         max_frames: Annotated[
             int | None, typer.Option(help="Track at most this many frames of each video.")
         ] = None,
@@ -136,6 +151,7 @@ def register(app: typer.Typer) -> None:
         are cancelled).
         """
         from mvtrack.cli import _signals
+        from mvtrack.io.outdir import run_folder
         from mvtrack.video.batch import track_many
 
         if workers is not None and workers < 1:
@@ -144,22 +160,19 @@ def register(app: typer.Typer) -> None:
             raise ValueError("--workers sets up a local cluster; do not give it with --scheduler")
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
-        if fps is not None and not fps > 0:
-            raise ValueError(f"--fps must be positive, got {fps}")
-        if out.exists() and not out.is_dir():
-            raise ValueError(f"--out {out} is a file, not a folder")
         sources = expand_videos(videos)
 
         # the same settings as `mvtrack track` builds from the same options
         settings = video_settings(
             config=config, preset=preset, predictor=predictor, gate=gate, distance=distance,
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
+            score_high=score_high, min_score=min_score, fps=fps, coasting=coasting,
         )
-
-        items = track_many(
-            sources, out, settings, workers=workers, scheduler=scheduler, fps=fps,
-            max_frames=max_frames,
-        )
+        with run_folder(out, force=force, inputs=sources, kind="batch"):
+            items = track_many(
+                sources, out, settings, workers=workers, scheduler=scheduler,
+                fps=settings.frame_rate, max_frames=max_frames,
+            )
         ok = [it for it in items if it.status == "ok"]
         failed = [it for it in items if it.status == "failed"]
         cancelled = [it for it in items if it.status == "cancelled"]

@@ -7,6 +7,8 @@ from typing import Annotated, Any
 
 import typer
 
+from mvtrack.cli._options import Force
+
 
 def run_demo(
     out: Path, *, frames: int | None = None, seed: int = 0, video: bool = True,
@@ -71,9 +73,12 @@ def register(app: typer.Typer) -> None:
 
     @app.command("demo")
     def demo_cmd(
-        out: Annotated[Path, typer.Option(help="Folder for the video, plots and results.")] = Path(
-            "mvtrack-demo"
-        ),
+        out: Annotated[
+            Path,
+            typer.Option(help="Folder for the video, plots and results. It holds this run "
+                         "only: a folder with an earlier demo is replaced when this one "
+                         "finishes; a folder with anything else is refused unless --force."),
+        ] = Path("mvtrack-demo"),
         frames: Annotated[
             int | None, typer.Option(help="Use only the first N of the 360 frames.")
         ] = None,
@@ -81,12 +86,16 @@ def register(app: typer.Typer) -> None:
         no_video: Annotated[
             bool, typer.Option("--no-video", help="Skip the annotated MP4.")
         ] = False,
+        force: Force = False,
     ) -> None:
         """Render a synthetic intersection (paper 1's X5), track it with the defaults, score it
         against its ground truth and leave the annotated video and plots in --out."""
         if frames is not None and not 2 <= frames <= 360:
             raise ValueError(f"--frames must be in 2..360, got {frames}")
-        f = run_demo(out, frames=frames, seed=seed, video=not no_video)
+        from mvtrack.io.outdir import run_folder
+
+        with run_folder(out, force=force, kind="demo"):
+            f = run_demo(out, frames=frames, seed=seed, video=not no_video)
         typer.echo(
             f"mvtrack demo: synthetic intersection (X5), {f['frames']} frames, "
             f"{f['vehicles']} vehicles"

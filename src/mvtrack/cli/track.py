@@ -10,15 +10,19 @@ from typing import Annotated
 import typer
 
 from mvtrack.cli._options import (
+    RUN_FOLDER_HELP,
     Assign,
     ConfigFile,
     DetectorName,
     Distance,
+    Force,
     Gate,
+    MinScore,
     NoTemplates,
     NoVideo,
     Predictor,
     Preset,
+    ScoreHigh,
     video_settings,
 )
 
@@ -31,7 +35,7 @@ def register(app: typer.Typer) -> None:
         video: Annotated[
             str, typer.Argument(help="Video file, image folder, camera index or URL.")
         ],
-        out: Annotated[Path, typer.Option(help="Output folder.")] = Path("mvtrack-out"),
+        out: Annotated[Path, typer.Option(help=RUN_FOLDER_HELP)] = Path("mvtrack-out"),
         preset: Preset = None,
         predictor: Predictor = None,
         gate: Gate = None,
@@ -39,13 +43,24 @@ def register(app: typer.Typer) -> None:
         assign: Assign = None,
         detector: DetectorName = None,
         config: ConfigFile = None,
+        score_high: ScoreHigh = None,
+        min_score: MinScore = None,
+        coasting: Annotated[
+            bool,
+            typer.Option("--coasting/--no-coasting",
+                         help="Also write the rows of coasting tracks (no detection, up to the "
+                         "tracker's coast_output) to results.txt."),
+        ] = False,
         no_video: NoVideo = False,
         no_templates: NoTemplates = False,
+        force: Force = False,
         max_frames: Annotated[
             int | None, typer.Option(help="Stop after this many frames.")
         ] = None,
         fps: Annotated[
-            float | None, typer.Option(help="Frame rate to assume instead of the source's.")
+            float | None,
+            typer.Option(help="Frame rate to assume instead of the source's (also [tracker] fps "
+                         "in --config; this option wins)."),
         ] = None,
         snapshot: Annotated[
             int | None,
@@ -72,34 +87,42 @@ def register(app: typer.Typer) -> None:
         Ctrl-C stops early and still writes what was tracked (exit status 130); so does
         SIGTERM (exit status 143). With --flush SECONDS, results.txt and states.csv grow
         while the run goes on (a camera or stream can be watched, and run forever).
+
+        --out holds one run: rerun into the same folder and the earlier run's files (video,
+        snapshots, report) are replaced as a whole once the new run has finished; a folder
+        holding anything else (other files, another command's run) is refused unless
+        --force.
         """
         from mvtrack.cli import _signals
         from mvtrack.errors import InputError
+        from mvtrack.io.outdir import run_folder
         from mvtrack.video import track_video
         from mvtrack.video.run import write_tables
 
         if max_frames is not None and max_frames < 1:
-            raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
-        if fps is not None and not fps > 0:
-            raise ValueError(f"--fps must be positive, got {fps}")
+            raise InputError(f"--max-frames must be at least 1, got {max_frames}")
         if snapshot is not None and snapshot < 0:
-            raise ValueError(f"--snapshot must be a frame index >= 0, got {snapshot}")
+            raise InputError(f"--snapshot must be a frame index >= 0, got {snapshot}")
+        if snapshot is not None and max_frames is not None and snapshot >= max_frames:
+            raise InputError(f"--snapshot {snapshot} is past the last frame tracked "
+                             f"(--max-frames {max_frames}: frames 0 to {max_frames - 1})")
         if flush is not None and not (math.isfinite(flush) and flush > 0):
-            raise ValueError(f"--flush must be a number of seconds > 0, got {flush:g}")
+            raise InputError(f"--flush must be a number of seconds > 0, got {flush:g}")
         settings = video_settings(
             config=config, preset=preset, predictor=predictor, gate=gate, distance=distance,
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
+            score_high=score_high, min_score=min_score, fps=fps, coasting=coasting,
         )
-        run = track_video(video, out, settings, fps=fps, max_frames=max_frames, snapshot=snapshot,
-                          flush=flush)
+        with run_folder(out, force=force, inputs=[video], kind="track"):
+            run = track_video(video, out, settings, fps=settings.frame_rate,
+                              max_frames=max_frames, snapshot=snapshot, flush=flush)
+            tables = write_tables(run, out, settings, fps=fps)
         res, summary = run.result, run.summary
         typer.echo(
             f"{summary['frames']} frames, {summary['tracks']} tracks, "
             f"{summary['processing_speed']} frames/s processed; files in {out}"
         )
-        for path in run.paths.values():
-            typer.echo(f"  {path}")
-        for path in write_tables(run, out, settings, fps=fps).values():
+        for path in [*run.paths.values(), *tables.values()]:
             typer.echo(f"  {path}")
         if res.interrupted:
             print(
@@ -111,3 +134,7 @@ def register(app: typer.Typer) -> None:
             raise typer.Exit(_signals.interrupt_status())
         if res.error is not None:
             raise InputError(f"{res.error}; results so far are in {out}")
+        if snapshot is not None and "snapshot" not in run.paths:
+            raise InputError(f"--snapshot {snapshot}: {video} ended after {res.n_frames} frames "
+                             f"(0 to {res.n_frames - 1}), so no frame was saved; the tracks "
+                             f"are in {out}")

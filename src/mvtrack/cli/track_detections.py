@@ -5,17 +5,23 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from mvtrack.cli._options import (
     Assign,
+    ConfigFile,
     Distance,
     Gate,
+    MinScore,
     Predictor,
+    Preset,
+    ScoreHigh,
+    check_choice,
     parse_gate,
     parse_optional_number,
+    tracker_names,
 )
 
 if TYPE_CHECKING:
@@ -42,17 +48,22 @@ def register(app: typer.Typer) -> None:
     @app.command("track-detections")
     def track_detections_cmd(
         detfile: Annotated[Path, typer.Argument(help="MOTChallenge detection file (det.txt).")],
-        out: Annotated[Path, typer.Option(help="Folder for the results file.")],
-        preset: Annotated[
-            str, typer.Option(help="Starting configuration: default, paper1 or paper2.")
-        ] = "default",
+        out: Annotated[
+            Path,
+            typer.Option(help="Folder for the results file <sequence>.txt (other files in it "
+                         "are kept: the results of many sequences may share a folder)."),
+        ],
+        config: ConfigFile = None,
+        preset: Preset = None,
         predictor: Predictor = None,
         distance: Distance = None,
         assign: Assign = None,
         gate: Gate = None,
         fps: Annotated[
-            float, typer.Option(help="Frame rate of the sequence (time-based settings).")
-        ] = 30.0,
+            float | None,
+            typer.Option(help="Frame rate of the sequence, for the time-based settings "
+                         "(default: [tracker] fps of --config, else 30).", show_default=False),
+        ] = None,
         coasting: Annotated[
             bool, typer.Option(help="Also write the rows of coasting (missed) tracks.")
         ] = True,
@@ -79,22 +90,8 @@ def register(app: typer.Typer) -> None:
                 show_default=False,
             ),
         ] = None,
-        score_high: Annotated[
-            float | None,
-            typer.Option(
-                help="Calibrated score in [0, 1] from which a detection is matched first; "
-                "lower ones are offered to the tracks left over (default: the preset's).",
-                show_default=False,
-            ),
-        ] = None,
-        min_score: Annotated[
-            float | None,
-            typer.Option(
-                help="Calibrated score in [0, 1] below which detections are dropped "
-                "(default: the preset's).",
-                show_default=False,
-            ),
-        ] = None,
+        score_high: ScoreHigh = None,
+        min_score: MinScore = None,
         birth_iou: Annotated[
             str | None,
             typer.Option(
@@ -115,32 +112,41 @@ def register(app: typer.Typer) -> None:
         from tqdm import tqdm
 
         from mvtrack.cli import _signals
+        from mvtrack.config import RunSettings, check_fps, check_tracker, load_config
         from mvtrack.io.mot import read_detections
+        from mvtrack.io.outdir import check_folder, make_folder
         from mvtrack.registry import ASSIGN_RULES, DISTANCES, PREDICTORS
-        from mvtrack.tracking import preset as make_preset
-        from mvtrack.tracking import track_detections
+        from mvtrack.tracking import PRESETS, track_detections
         from mvtrack.tracking.offline import frames_with_detections
+        from mvtrack.video.build import build_tracker_config
 
-        _check_choice("--predictor", predictor, PREDICTORS)
-        _check_choice("--distance", distance, DISTANCES)
-        _check_choice("--assign", assign, ASSIGN_RULES)
-        changes = {
-            k: v
-            for k, v in (("predictor", predictor), ("distance", distance), ("assign", assign))
-            if v is not None
+        check_choice("--preset", preset, PRESETS)
+        check_choice("--predictor", predictor, PREDICTORS)
+        check_choice("--distance", distance, DISTANCES)
+        check_choice("--assign", assign, ASSIGN_RULES)
+        if fps is not None:
+            check_fps("--fps", fps)
+        changes: dict[str, Any] = {
+            "preset": preset, "predictor": predictor, "distance": distance, "assign": assign,
+            "gate": parse_gate(gate), "fps": fps,
+            "score_scale": None if score_scale is None else parse_score_scale(score_scale),
+            "score_high": score_high, "min_score": min_score,
+            "birth_iou": None if birth_iou is None else parse_optional_number(
+                "--birth-iou", birth_iou),
         }
-        if gate is not None:
-            changes["gate"] = parse_gate(gate)
-        if score_scale is not None:
-            changes["score_scale"] = parse_score_scale(score_scale)
-        if score_high is not None:
-            changes["score_high"] = score_high
-        if min_score is not None:
-            changes["min_score"] = min_score
+        given = {k for k, v in changes.items() if v is not None}
         if birth_iou is not None:
-            changes["birth_iou"] = parse_optional_number("--birth-iou", birth_iou)
-        config = make_preset(preset, fps=fps, **changes)
+            given.add("birth_iou")  # "none" (the rule off) is a value given
+        # [tracker] of --config (the same file as mvtrack track's; its other tables are for
+        # video runs), then the options
+        table = dict(load_config(config).tracker) if config is not None else {}
+        table.update({k: v for k, v in changes.items() if k in given})
+        table.setdefault("fps", 30.0)
+        check_tracker(table, tracker_names(given, config))
+        config_ = build_tracker_config(RunSettings(tracker=table), float(table["fps"]))
+        check_folder(out)
         frames = read_detections(detfile)
+        make_folder(out)  # before the work: a folder that cannot be made stops it now
         t0 = time.perf_counter()
         bar = tqdm(total=len(frames), desc="tracking", unit="frame",
                    disable=not sys.stderr.isatty())
@@ -155,7 +161,7 @@ def register(app: typer.Typer) -> None:
         # Ctrl-C and SIGTERM end the run at a frame boundary; what was tracked is written
         with _signals.deferred() as stop:
             log = track_detections(stop.until(progress(frames_with_detections(frames))),
-                                   config, backfill_rows=backfill, interpolate=interpolate)
+                                   config_, backfill_rows=backfill, interpolate=interpolate)
         bar.close()
         seconds = time.perf_counter() - t0
         dest = out / results_name(detfile)
@@ -164,10 +170,11 @@ def register(app: typer.Typer) -> None:
         ms = 1000.0 * seconds / max(done, 1)
         typer.echo(
             f"{done} frames, {frames.num_detections} detections -> {log.track_ids.size} "
-            f"tracks, {len(log.to_mot(coasting))} rows ({config.predictor}, {config.distance}, "
-            f"{config.assign}; {ms:.2f} ms/frame) -> {dest}"
+            f"tracks, {len(log.to_mot(coasting))} rows ({config_.predictor}, "
+            f"{config_.distance}, {config_.assign}, {config_.fps:g} fps; {ms:.2f} ms/frame) "
+            f"-> {dest}"
         )
-        typer.echo(f"rows written: {output_policy(config, coasting, backfill, interpolate)}")
+        typer.echo(f"rows written: {output_policy(config_, coasting, backfill, interpolate)}")
         if stop.requested:
             print(f"error: {_signals.interrupt_word()} after {done} of {len(frames)} frames; "
                   f"the tracks of those frames are in {dest}", file=sys.stderr)
@@ -177,6 +184,7 @@ def register(app: typer.Typer) -> None:
 
 def parse_score_scale(text: str) -> str | tuple[float, float]:
     """``auto`` / ``prob`` as they are, ``"LO,HI"`` as a pair of numbers."""
+    from mvtrack.errors import InputError
     from mvtrack.tracking.scores import check_scale
 
     if "," in text:
@@ -184,9 +192,14 @@ def parse_score_scale(text: str) -> str | tuple[float, float]:
         try:
             pair = tuple(float(v) for v in parts)
         except ValueError:
-            raise ValueError(f"--score-scale LO,HI needs two numbers, got {text!r}") from None
-        return check_scale(pair)
-    return check_scale(text.strip())
+            raise InputError(f"--score-scale LO,HI needs two numbers, got {text!r}") from None
+        value: Any = pair
+    else:
+        value = text.strip()
+    try:
+        return check_scale(value)
+    except ValueError as exc:
+        raise InputError(f"--score-scale {text!r}: {exc}") from None
 
 
 def output_policy(config: TrackerConfig, coasting: bool, backfill: bool = True,
@@ -206,7 +219,3 @@ def output_policy(config: TrackerConfig, coasting: bool, backfill: bool = True,
                      "first")
     return ", ".join(parts)
 
-
-def _check_choice(option: str, value: str | None, known: object) -> None:
-    if value is not None and value not in known:  # type: ignore[operator]
-        raise ValueError(f"{option}: unknown value {value!r}; choose one of: {', '.join(known)}")  # type: ignore[call-overload]

@@ -13,6 +13,7 @@ no result box intersects the extent of the gt boxes    refused
 result rows after the last ground-truth frame          warning (they count as FP)
 most result boxes outside the extent of the gt boxes   warning
 almost no result box overlaps a gt box at the IoU      warning
+the two files look swapped (:func:`swapped_note`)      warning
 =====================================================  ============================
 
 An empty results table is not refused: it scores MOTA 0 (every ground-truth box missed).
@@ -88,6 +89,9 @@ def check_inputs(
             "height?"
         )
     notes = []
+    swapped = swapped_note(gt, pred)
+    if swapped is not None:
+        notes.append(swapped)
     late = int((pf > gf.max()).sum())
     if late:
         notes.append(
@@ -110,3 +114,28 @@ def check_inputs(
             f"{iou:g}: results of another sequence?"
         )
     return notes
+
+
+def swapped_note(gt: MotTable, pred: MotTable) -> str | None:
+    """A warning when the ground truth looks like results and the results like ground truth.
+
+    Column 7 of a ground-truth file is a flag, 0 or 1 (MOT15 to MOT20); a results file puts
+    a score there (often -1, or a confidence). Columns 8 and 9 of MOT16+ ground truth are a
+    class (1, 2, ...) and a visibility in [0, 1]; a results file has -1 there (MOT15's ground
+    truth too). So a "ground truth" with other values than 0 and 1 in column 7, or results
+    with a class and a visibility on every row beside a ground truth without them, were
+    probably given the other way round (``--gt`` and ``--pred`` swapped).
+    """
+    reasons = []
+    scores = np.unique(gt.conf[(gt.conf != 0) & (gt.conf != 1)])
+    if scores.size:
+        reasons.append(f"the ground truth's column 7 holds scores such as {scores[0]:g}, not "
+                       "the 0/1 flag of ground truth")
+    truth_like = (len(pred) > 0 and bool((pred.cls >= 1).all())
+                  and bool(((pred.visibility >= 0) & (pred.visibility <= 1)).all()))
+    if truth_like and bool((gt.cls < 0).all()):
+        reasons.append("the results have the class and visibility columns (8, 9) of ground "
+                       "truth, the ground truth has none")
+    if not reasons:
+        return None
+    return f"{'; '.join(reasons)}: are --gt and --pred swapped?"

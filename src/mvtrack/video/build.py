@@ -44,7 +44,9 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
     TOML has no null, so the string ``"none"`` (any case) stands for ``None`` (e.g.
     ``birth_iou = "none"`` lets every detection left over start a track). ``frame_size``
     (the image's, :func:`~mvtrack.video.resolve_settings`) is the tracker's, not the
-    configuration's (:func:`build_tracker`).
+    configuration's (:func:`build_tracker`). A ``fps`` in ``settings.tracker``
+    (``[tracker] fps`` of a settings file) wins over ``fps``: ``mvtrack track`` gives the
+    source the same frame rate (:meth:`mvtrack.config.RunSettings.frame_rate`).
 
     Raises
     ------
@@ -57,6 +59,9 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
               for k, v in settings.tracker.items()}
     name = params.pop("preset", "default")
     params.pop("frame_size", None)
+    # [tracker] fps (or --fps, which the command line puts there) is the run's frame rate:
+    # it replaces the source's, and is given to the preset once
+    fps = params.pop("fps", fps)
     if name not in PRESETS:
         raise InputError(f"unknown tracker preset {name!r}; choose one of: {', '.join(PRESETS)}")
     known = {f.name for f in dataclasses.fields(TrackerConfig)}

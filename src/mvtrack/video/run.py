@@ -68,7 +68,8 @@ def track_to_folder(
 
     - ``results.txt`` — MOTChallenge results (frame, id, left, top, w, h, conf, -1, -1, -1)
       of the rows with a measurement (confirmed, or stopped and held by template matching);
-      coasting predictions are drawn in the video but not written;
+      coasting predictions are drawn in the video, and written only with
+      ``settings.coasting`` (``--coasting``);
     - ``tracks.mp4`` — the annotated video (unless ``settings.video`` is False): boxes in
       their state colour, IDs, trails and the gates the tracker applies to the next frame
       (:meth:`~mvtrack.tracking.Tracker.gates`: ellipses or circles, stretched for large
@@ -150,7 +151,8 @@ def track_to_folder(
         gap = getattr(config, "max_misses", None)
         if gap is not None and relinker is not None:  # a relinked ID pauses up to the window
             gap += relinker.window
-        stream = StreamingOutput(out, flush, gap=gap, fps=fps)
+        stream = StreamingOutput(out, flush, gap=gap, fps=fps,
+                                 coasting=settings.coasting)
         log = stream.log
         paths.update(stream.paths)
 
@@ -220,7 +222,7 @@ def track_to_folder(
 
     if stream is None:
         paths["results"] = out / "results.txt"
-        log.write_mot(paths["results"], include_coasting=False)
+        log.write_mot(paths["results"], include_coasting=settings.coasting)
         rows = TrackRows.from_frames(log.frames_with_rows())
         lengths = _track_lengths(log)
         n_tracks = len(lengths)
@@ -362,12 +364,20 @@ def track_video(
     Raises
     ------
     InputError
-        Missing, unreadable or empty source; bad settings.
+        Missing, unreadable or empty source; bad settings; a ``snapshot`` past the last
+        frame of a source whose length is known.
     """
+    from mvtrack.errors import InputError
     from mvtrack.io.video import open_source
 
     src = open_source(video, fps=fps)
     with src:
+        last = src.frame_count if max_frames is None else min(src.frame_count or max_frames,
+                                                               max_frames)
+        if snapshot is not None and last is not None and snapshot >= last:
+            raise InputError(f"--snapshot {snapshot} is past the last frame {last - 1} of "
+                             f"{video}" + ("" if last == src.frame_count else
+                                           f" tracked (--max-frames {max_frames})"))
         resolved = resolve_settings(settings, src.size, src.fps)
         parts = (build_detector(resolved), build_tracker(resolved, src.fps))
         return track_to_folder(

@@ -202,6 +202,8 @@ class StreamingOutput:
         Frames kept for the trajectory figure (:class:`RecentRows`).
     clock : callable
         Seconds, monotonic (a test may pass its own).
+    coasting : bool
+        Also write the rows of coasting tracks to ``results.txt`` (``--coasting``).
 
     Raises
     ------
@@ -214,7 +216,7 @@ class StreamingOutput:
     def __init__(
         self, out: str | Path, interval: float, *, gap: int | None = None,
         history: int = TRAJECTORY_FRAMES, clock: Callable[[], float] = time.monotonic,
-        fps: float = 30.0,
+        fps: float = 30.0, coasting: bool = False,
     ) -> None:
         from mvtrack.analytics.outputs import states_table, table_csv
 
@@ -223,6 +225,7 @@ class StreamingOutput:
         out = Path(out)
         self.interval = float(interval)
         self.fps = float(fps)
+        self.coasting = bool(coasting)
         self.results = LineAppender(out / "results.txt")
         self.states = LineAppender(out / "states.csv",
                                    header=table_csv(states_table(TrackLog())))
@@ -265,7 +268,7 @@ class StreamingOutput:
             cols = self.log.columns()
             self.stats.add(cols["frame"], cols["track_id"], cols["state"], now)
             self.recent.add(cols, now)
-            results = format_rows(self.log.to_mot(include_coasting=False), "results")
+            results = format_rows(self.log.to_mot(include_coasting=self.coasting), "results")
             table = states_table(self.log, _FrameItems(first, self._flags),
                                  _FrameItems(first, self._scores), fps=self.fps)
             states = table_csv(table).split("\n", 1)[1] if len(table["frame"]) else ""

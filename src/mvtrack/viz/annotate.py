@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.types import TrackFrame, TrackState
+from mvtrack.viz.labels import place_frame_labels
 
 FloatArray = NDArray[np.float64]
 
@@ -156,8 +157,14 @@ def draw_boxes(
     tracks: TrackFrame,
     thickness: int = 2,
     labels: bool = True,
+    blocked: NDArray[np.int64] | None = None,
 ) -> NDArray[np.uint8]:
-    """Draw each track's box in its state colour, and ``ID`` (+ state letter) above it."""
+    """Draw each track's box in its state colour, and ``ID`` (+ state letter) beside it.
+
+    The labels stay inside the frame, off the ``blocked`` rectangles (``x0, y0, x1, y1``: the
+    text header) and off each other (:func:`mvtrack.viz.labels.place_frame_labels`): above
+    the box where there is room, else below or inside it.
+    """
     if len(tracks) == 0:
         return image
     xy, wh = tracks.filtered_xy, tracks.wh
@@ -167,16 +174,23 @@ def draw_boxes(
         sel = ok & (tracks.state == state)
         if sel.any():
             cv2.polylines(image, list(polys[sel]), True, color, thickness, cv2.LINE_8)
-    if labels:
-        top_left = polys[:, 0, :]
+    if labels and ok.any():
         h, w = image.shape[:2]
         scale = _text_scale(w, h)
         thick = 1 if scale < 0.6 else 2
-        for i in np.flatnonzero(ok):  # one putText per label: OpenCV draws text one by one
+        idx = np.flatnonzero(ok)
+        texts = [f"{int(tracks.track_id[i])}{STATE_LABELS.get(int(tracks.state[i]), '?')}"
+                 for i in idx]
+        metrics = [cv2.getTextSize(t, cv2.FONT_HERSHEY_SIMPLEX, scale, thick) for t in texts]
+        # the dark box _label fills: tw + 3 by th + base + 2 pixels
+        sizes = np.array([[tw + 3, th + base + 2] for (tw, th), base in metrics], np.int64)
+        box = np.concatenate([polys[idx, 0, :], polys[idx, 2, :]], axis=1)
+        corners = place_frame_labels(box, sizes, (w, h), blocked)
+        for k, i in enumerate(idx):  # one putText per label: OpenCV draws text one by one
+            th = metrics[k][0][1]
             state = int(tracks.state[i])
-            text = f"{int(tracks.track_id[i])}{STATE_LABELS.get(state, '?')}"
-            org = (int(top_left[i, 0]), int(max(top_left[i, 1] - 3, 10)))
-            _label(image, text, org, scale, thick, STATE_COLORS.get(state, (255, 255, 255)))
+            org = (int(corners[k, 0]) + 1, int(corners[k, 1]) + th + 2)  # the box at the corner
+            _label(image, texts[k], org, scale, thick, STATE_COLORS.get(state, (255, 255, 255)))
     return image
 
 
@@ -186,14 +200,20 @@ def _text_scale(w: int, h: int) -> float:
     return max(min(0.4, side / 800.0), side / 1100.0)
 
 
+def _label_box(text: str, org: tuple[int, int], scale: float, thick: int) -> tuple[int, ...]:
+    """``x0, y0, x1, y1`` of the dark box :func:`_label` draws behind ``text``."""
+    (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, thick)
+    x, y = org
+    return (x - 1, y - th - 2, x + tw + 1, y + base - 1)
+
+
 def _label(
     image: NDArray[np.uint8], text: str, org: tuple[int, int], scale: float, thick: int,
     color: tuple[int, int, int],
 ) -> None:
     """``text`` in ``color`` on a dark box (readable on any background), baseline at ``org``."""
-    (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, thick)
-    x, y = org
-    cv2.rectangle(image, (x - 1, y - th - 2), (x + tw + 1, y + base - 1), (20, 20, 20), -1)
+    x0, y0, x1, y1 = _label_box(text, org, scale, thick)
+    cv2.rectangle(image, (x0, y0), (x1, y1), (20, 20, 20), -1)
     cv2.putText(image, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, color, thick, cv2.LINE_AA)
 
 
@@ -291,10 +311,13 @@ def annotate_frame(
         draw_gates(img, gate_center, outer_cov, outer_r2, color=OUTER_GATE_COLOR)
     if gate_cov is not None and gate_center is not None and gate_r2 is not None:
         draw_gates(img, gate_center, gate_cov, gate_r2)
-    draw_boxes(img, tracks)
     h, w = img.shape[:2]
     scale = _text_scale(w, h)
     step = round(35 * scale)
-    for k, line in enumerate(text):
-        _label(img, line, (4, step + step * k), scale, 1, (255, 255, 255))
+    header = [(line, (4, step + step * k)) for k, line in enumerate(text)]
+    blocked = np.array([_label_box(line, org, scale, 1) for line, org in header],
+                       np.int64).reshape(-1, 4)
+    draw_boxes(img, tracks, blocked=blocked)  # the IDs kept clear of the header
+    for line, org in header:
+        _label(img, line, org, scale, 1, (255, 255, 255))
     return img

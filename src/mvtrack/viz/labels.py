@@ -80,3 +80,96 @@ def place_labels(
         taken = np.vstack([taken, box[i]])
         placed.append(ann)
     return placed
+
+
+def place_frame_labels(
+    boxes: NDArray[np.int64],
+    sizes: NDArray[np.int64],
+    frame: tuple[int, int],
+    blocked: NDArray[np.int64] | None = None,
+) -> NDArray[np.int64]:
+    """Top-left corners, in pixels, of one label per box of a video frame, each inside the
+    frame and clear of the ``blocked`` rectangles (the frame's text header) and of the labels
+    placed before it.
+
+    A label is tried, in order, above its box (left-aligned, then right-aligned), below it
+    (left, right), inside its top-left corner, left and right of its top edge, and (for a box
+    hidden under the header) just below the ``blocked`` rectangles, each moved into the frame;
+    it takes the first place that overlaps nothing (nor touches: a pixel apart, so two labels
+    never read as one), else the one that overlaps least. Labels are placed from the top of the
+    frame down (then left to right), so that two boxes side by side get two labels side by side
+    or one above the other, never one over the other.
+
+    Parameters
+    ----------
+    boxes : (K, 4) int
+        ``x0, y0, x1, y1`` of each box.
+    sizes : (K, 2) int
+        Width and height of each label.
+    frame : (W, H)
+        Frame size.
+    blocked : (B, 4) int, optional
+        Rectangles ``x0, y0, x1, y1`` no label may cover.
+
+    Returns
+    -------
+    (K, 2) int64
+        ``x, y`` of each label's top-left corner, in the order of ``boxes``.
+    """
+    boxes = np.asarray(boxes, np.int64).reshape(-1, 4)
+    sizes = np.asarray(sizes, np.int64).reshape(-1, 2)
+    blocked = (np.zeros((0, 4), np.int64) if blocked is None
+               else np.asarray(blocked, np.int64).reshape(-1, 4))
+    below_blocked = int(blocked[:, 3].max()) + 2 if len(blocked) else 0
+
+    # every label at its first place at once; only those that meet another or the header
+    # look further, one at a time (a sparse scene has none)
+    first = _inside(np.stack([boxes[:, 0], boxes[:, 1] - sizes[:, 1] - 1], axis=1), sizes,
+                    frame)
+    rects = np.concatenate([first, first + sizes], axis=1)
+    clash = _overlap(rects, rects) > 0
+    np.fill_diagonal(clash, False)
+    moved = np.flatnonzero(clash.any(axis=1) | (_overlap(rects, blocked) > 0).any(axis=1))
+    out = first.copy()
+    if moved.size == 0:
+        return out
+    moved = moved[np.lexsort((boxes[moved, 0], boxes[moved, 1]))]
+    x0, y0, x1, y1 = boxes[moved].T
+    w, h = sizes[moved].T
+    below = np.full_like(x0, below_blocked)
+    cand = np.stack([  # (M, 9, 2), the places in the order they are tried
+        np.stack([x0, y0 - h - 1], 1), np.stack([x1 - w, y0 - h - 1], 1),  # above
+        np.stack([x0, y1 + 1], 1), np.stack([x1 - w, y1 + 1], 1),  # below
+        np.stack([x0 + 1, y0 + 1], 1),  # inside the top-left corner
+        np.stack([x0 - w - 1, y0], 1), np.stack([x1 + 1, y0], 1),  # beside the top edge
+        np.stack([x0, below], 1), np.stack([x1 - w, below], 1),  # a box under the header
+    ], axis=1)
+    cand = _inside(cand, sizes[moved][:, None, :], frame)
+    cand_rects = np.concatenate([cand, cand + sizes[moved][:, None, :]], axis=2)
+    taken = np.zeros((len(blocked) + len(boxes), 4), np.int64)
+    fixed = np.vstack([blocked, np.delete(rects, moved, axis=0)])
+    n = len(fixed)
+    taken[:n] = fixed
+    for j, i in enumerate(moved):  # one label at a time: each sees those placed before
+        best = int(np.argmin(_overlap(cand_rects[j], taken[:n]).sum(axis=1)))
+        out[i] = cand[j, best]
+        taken[n] = cand_rects[j, best]
+        n += 1
+    return out
+
+
+def _inside(corner: NDArray[np.int64], size: NDArray[np.int64],
+            frame: tuple[int, int]) -> NDArray[np.int64]:
+    """Top-left ``corner`` of labels of ``size`` moved into the ``frame`` (W, H)."""
+    hi = np.maximum(np.asarray(frame, np.int64) - size, 0)
+    return np.clip(corner, 0, hi)
+
+
+def _overlap(a: NDArray[np.int64], b: NDArray[np.int64]) -> NDArray[np.int64]:
+    """(len(a), len(b)) areas of the rectangles ``x0, y0, x1, y1`` of ``a`` and ``b``, each
+    grown by a pixel (touching counts: two labels must be a pixel apart)."""
+    ox = (np.minimum(a[:, None, 2], b[None, :, 2]) + 1
+          - np.maximum(a[:, None, 0], b[None, :, 0])).clip(0)
+    oy = (np.minimum(a[:, None, 3], b[None, :, 3]) + 1
+          - np.maximum(a[:, None, 1], b[None, :, 1])).clip(0)
+    return ox * oy
