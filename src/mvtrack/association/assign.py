@@ -61,23 +61,20 @@ _SMALL = 4
 
 @kernel
 def _pair_cost(i: int, j: int, cx: FloatArray, S: FloatArray, twh: FloatArray,
-               dxy: FloatArray, dwh: FloatArray, size_w: float, size_log: float) -> float:
-    """The gate's value of track ``i`` and detection ``j`` (``inf`` outside the size gate).
+               dxy: FloatArray, dwh: FloatArray, size_w: float) -> float:
+    """The gate's value of track ``i`` and detection ``j``.
 
     ``S`` (N, 3) is the gate's covariance ``[[s_xx, s_xy], [s_xy, s_yy]]`` as ``(s_xx, s_xy,
     s_yy)``; the value is ``Δᵀ S⁻¹ Δ`` plus ``size_w`` times the squared log ratios of the
-    widths and heights. ``size_log > 0`` refuses pairs whose heights differ by more than the
-    factor ``e^size_log`` or widths by more than its square.
+    widths and heights.
     """
     sxx, sxy, syy = S[i, 0], S[i, 1], S[i, 2]
     det = sxx * syy - sxy * sxy
     dx, dy = dxy[j, 0] - cx[i, 0], dxy[j, 1] - cx[i, 1]
     d2 = (syy * dx * dx - 2.0 * sxy * dx * dy + sxx * dy * dy) / det  # Δᵀ S⁻¹ Δ
-    if size_w > 0.0 or size_log > 0.0:
+    if size_w > 0.0:
         lw = math.log(dwh[j, 0] / twh[i, 0])
         lh = math.log(dwh[j, 1] / twh[i, 1])
-        if size_log > 0.0 and (abs(lh) > size_log or abs(lw) > 2.0 * size_log):
-            return math.inf
         d2 += size_w * (lw * lw + lh * lh)
     return d2
 
@@ -85,7 +82,7 @@ def _pair_cost(i: int, j: int, cx: FloatArray, S: FloatArray, twh: FloatArray,
 @kernel
 def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_],
                     dxy: FloatArray, dwh: FloatArray, dsel: NDArray[np.bool_], gate: float,
-                    size_w: float, size_log: float) -> tuple[IntArray, IntArray, FloatArray]:
+                    size_w: float) -> tuple[IntArray, IntArray, FloatArray]:
     """The pairs of selected tracks and detections inside the quadratic gate, with their
     values (:func:`_pair_cost`), sorted by track then detection.
 
@@ -109,7 +106,7 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
             for j in dr:
                 if abs(dxy[j, 0] - cx[i, 0]) > rx or abs(dxy[j, 1] - cx[i, 1]) > ry:
                     continue
-                c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w, size_log)
+                c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w)
                 if c <= gate:
                     if k == cap:
                         cap *= 2
@@ -159,7 +156,7 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                 j = members[p]
                 if abs(dxy[j, 0] - cx[i, 0]) > rx or abs(dxy[j, 1] - cx[i, 1]) > ry:
                     continue
-                c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w, size_log)
+                c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w)
                 if c <= gate:
                     if k == cap:
                         cap *= 2
@@ -251,8 +248,14 @@ def _small_block(block: FloatArray, unmatched: float) -> tuple[IntArray, IntArra
             i -= 1
         if i < 0:
             break
-    keep = best < c
-    return np.flatnonzero(keep), best[keep]
+    rows = np.empty(r, np.intp)
+    k = 0
+    for i in range(r):  # a row on a non-pair (cost unmatched) stays unmatched
+        if best[i] < c and block[i, best[i]] < unmatched:
+            rows[k] = i
+            k += 1
+    rows = rows[:k]
+    return rows, best[rows]
 
 
 @kernel
@@ -303,7 +306,8 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
     nr = 0
     for q in range(p):
         if tdeg[ti[q]] == 1 and ddeg[dj[q]] == 1:
-            det_index[ti[q]] = dj[q]
+            if cost[q] < unmatched:  # worth matching only below the cost of leaving both
+                det_index[ti[q]] = dj[q]
         else:
             rest[nr] = q
             nr += 1
@@ -328,7 +332,8 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
         q1 = q0 + size[r]
         if q1 - q0 == 1:  # one pair: no conflict
             q = order[q0]
-            det_index[ti[q]] = dj[q]
+            if cost[q] < unmatched:
+                det_index[ti[q]] = dj[q]
         else:
             idx = order[q0:q1]
             rows = np.unique(ti[idx])
@@ -354,7 +359,7 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
 @kernel
 def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
               dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8], gate: float,
-              size_w: float, size_log: float, rule: int) -> IntArray:
+              size_w: float, rule: int) -> IntArray:
     """The detection of every track in one frame (−1: none), in two stages by score.
 
     Parameters
@@ -369,9 +374,9 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
     dclass : (M,) int8
         ``HIGH`` (2), ``LOW`` (1) or ``DROPPED`` (0): every track is matched against the high
         detections first, then the tracks left over against the low ones.
-    gate, size_w, size_log, rule
-        The gate on the value, the weight of the size term, the size gate (log of the
-        factor; 0: none) and the rule (:data:`RULE_CODES`).
+    gate, size_w, rule
+        The gate on the value, the weight of the size term and the rule
+        (:data:`RULE_CODES`).
     """
     n, m = cx.shape[0], dxy.shape[0]
     det_index = np.full(n, -1, np.intp)
@@ -388,8 +393,7 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
         if cost.shape[0] == n and cost.shape[1] == m and n > 0:
             ti, dj, c = matrix_pairs(cost, tsel, dsel, gate)
         else:
-            ti, dj, c = quadratic_pairs(cx, S, twh, tsel, dxy, dwh, dsel, gate, size_w,
-                                        size_log)
+            ti, dj, c = quadratic_pairs(cx, S, twh, tsel, dxy, dwh, dsel, gate, size_w)
         solve(ti, dj, c, n, m, rule, gate, det_index)
     return det_index
 
@@ -420,6 +424,15 @@ class Assignment:
     unmatched_tracks: IntArray
     unmatched_dets: IntArray
 
+    def __len__(self) -> int:
+        return int(self.track.size)
+
+    def det_of_track(self, n: int) -> IntArray:
+        """Each of ``n`` tracks' detection row (−1: none)."""
+        out = np.full(n, -1, dtype=np.intp)
+        out[self.track] = self.det
+        return out
+
 
 def assign(
     ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: str = "optimal",
@@ -436,16 +449,16 @@ def assign(
     rule : {"nearest", "greedy", "optimal"}
     unmatched_cost : float, optional
         ``optimal`` only: the cost ``u`` of leaving a track and a detection unmatched (a pair
-        is matched only if that lowers the total); default twice the largest ``|cost|``, so
-        every pair is worth matching on its own.
+        is matched only if that lowers the total); default just above twice the largest
+        ``|cost|``, so every pair is worth matching on its own and one more match is worth
+        up to that much extra cost.
 
     Returns
     -------
     Assignment
     """
     if rule not in RULE_CODES:
-        raise ValueError(f"unknown assignment rule {rule!r}; choose one of: "
-                         f"{', '.join(ASSIGN_RULES)}")
+        raise ValueError(f"unknown rule {rule!r}; choose one of: {', '.join(ASSIGN_RULES)}")
     ti = np.asarray(ti, dtype=np.intp)
     dj = np.asarray(dj, dtype=np.intp)
     cost = np.asarray(cost, dtype=np.float64)
@@ -458,8 +471,9 @@ def assign(
     order = np.lexsort((dj, ti))
     ti, dj, cost = ti[order], dj[order], cost[order]
     u = unmatched_cost
-    if u is None:
-        u = 2.0 * float(np.abs(cost).max()) + 1.0 if cost.size else 1.0
+    if u is None:  # just above twice the largest value: every pair is worth matching
+        big = 2.0 * float(np.abs(cost).max()) if cost.size else 0.0
+        u = big * (1.0 + 1e-9) + 1e-12
     det_index = np.full(n, -1, np.intp)
     solve(ti, dj, cost, n, m, RULE_CODES[rule], float(u), det_index)
     track = np.flatnonzero(det_index >= 0)
