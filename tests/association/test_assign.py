@@ -17,10 +17,10 @@ from mvtrack.association.assign import (
     _small_block,
     assign,
     associate,
-    quadratic_pairs,
     solve,
 )
 from mvtrack.association.gate import Gate
+from mvtrack.association.pairs import quadratic_pairs
 from mvtrack.association.view import TrackView
 
 

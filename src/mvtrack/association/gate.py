@@ -7,7 +7,7 @@ when
 .. math::
     (z - c_i)^T C_i^{-1} (z - c_i) + w_s \\,\\lVert \\ln(wh_d / wh_i) \\rVert^2 \\le g
 
-(:func:`mvtrack.association.assign.quadratic_pairs` finds the pairs, the same value is their
+(:func:`mvtrack.association.pairs.quadratic_pairs` finds the pairs, the same value is their
 cost). Every distance of papers 1 and 2 but two is such a quadratic form about the
 prediction (:func:`shapes`):
 
@@ -37,8 +37,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.association.assign import matrix_pairs, quadratic_pairs
 from mvtrack.association.distances import get_distance
+from mvtrack.association.pairs import matrix_pairs, quadratic_pairs
 from mvtrack.association.view import TrackView
 
 FloatArray = NDArray[np.float64]

@@ -324,15 +324,3 @@ def commit(ints: IntArray, floats: FloatArray, det_index: NDArray[np.intp],
         velocity[a, 0] = velocity[a, 1] = 0.0
     return (ints2, floats2, keep, new, tid, state, det, measured, filtered, predicted, box,
             velocity, uid, next_id, next_uid, speed2, n_speed)
-
-
-def hand_out_ids(ints: IntArray, confirmed_now: BoolArray, next_id: int) -> int:
-    """Give the tracks confirmed this frame consecutive public IDs from ``next_id``, in place.
-
-    Tracks confirmed in the same frame are numbered in order of their internal uid (birth
-    order; rows are kept in uid order), so IDs do not depend on the order of the detections.
-    Returns the next free ID.
-    """
-    idx = confirmed_now.nonzero()[0]
-    ints[idx, TID] = np.arange(next_id, next_id + idx.size)
-    return next_id + int(idx.size)
