@@ -58,6 +58,10 @@ DETECTORS: dict[str, Choice] = {
         "OpenCV's HOG people detector over the whole frame (no background model)",
         "mvtrack.detection.hog:HOGDetector",
     ),
+    "road-users": Choice(
+        "any moving road user: colour background, the scene's kinds and sizes learnt",
+        "mvtrack.detection.roadusers:RoadUserDetector",
+    ),
     "scene": Choice(
         "per-pixel background, shadows, size prior, blobs split with the tracker",
         "mvtrack.detection.scene:SceneDetector",

@@ -11,7 +11,7 @@ from mvtrack.config import RunSettings
 REFERENCE_SIZE = (320, 240)
 
 #: front ends that size their own blob stage (no size-dependent ``min_area``, ``close_size``)
-OWN_BLOB_STAGE = frozenset({"scene"})
+OWN_BLOB_STAGE = frozenset({"scene", "road-users"})
 
 
 #: seconds a tracked pixel is kept out of the disturbance map's background (``hold``)
