@@ -35,10 +35,10 @@ class Choice:
     target: str = ""
 
 
-#: the front end used when none is named: the one that measures best on real video
-#: (KITTI-17 from the command line, docs/bench/frontend.md §6); the paper experiments and
-#: ``mvtrack demo`` name paper 1's disturbance map themselves
-DEFAULT_DETECTOR = "scene"
+#: the front end used when none is named: one model for any moving road user, cars and
+#: people alike (docs/bench/vehicles.md); the paper experiments and ``mvtrack demo`` name
+#: paper 1's disturbance map themselves
+DEFAULT_DETECTOR = "road-users"
 
 #: detection front ends (:func:`mvtrack.detection.make_detector`)
 DETECTORS: dict[str, Choice] = {

@@ -61,6 +61,14 @@ def register(app: typer.Typer) -> None:
                 metavar="SECONDS",
             ),
         ] = None,
+        masks: Annotated[
+            Path | None,
+            typer.Option(
+                help="Also write each frame's foreground as a 0/255 PNG into this folder "
+                "(DIR/000001.png for the first frame; each file written atomically).",
+                metavar="DIR",
+            ),
+        ] = None,
     ) -> None:
         """Track the moving objects of VIDEO; write results.txt (MOTChallenge), tracks.mp4,
         trajectories.png, summary.json and states.csv (every row's state, its evidence, the
@@ -91,7 +99,7 @@ def register(app: typer.Typer) -> None:
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
         )
         run = track_video(video, out, settings, fps=fps, max_frames=max_frames, snapshot=snapshot,
-                          flush=flush)
+                          flush=flush, masks=masks)
         res, summary = run.result, run.summary
         typer.echo(
             f"{summary['frames']} frames, {summary['tracks']} tracks, "

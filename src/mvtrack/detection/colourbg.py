@@ -46,7 +46,7 @@ a shadow when either its colour is kept (chromaticities within ``shadow_chroma``
 no texture of its own (its 3×3 grey-level spread at most the background's, scaled by the
 ratio, plus ``shadow_texture``: a dark grey car on a grey road keeps the road's colour but
 brings its own edges), or the background's texture is kept under a change of colour (a
-shadow lit by the blue sky: the 5×5 correlation of frame and background above
+shadow lit by the blue sky: the 3×3 correlation of frame and background above
 ``shadow_correlation`` on a background with texture). The test runs on the candidates only
 (sparse gathers), not on the whole frame.
 
@@ -105,7 +105,7 @@ class ColourBackground:
         background's.
     shadow_correlation, shadow_min_texture : float, default 0.8 and 3
         A candidate whose colour changed is a shadow when the frame's grey levels correlate
-        with the background's over a 5×5 window by more than ``shadow_correlation`` and the
+        with the background's over a 3×3 window by more than ``shadow_correlation`` and the
         background has a local spread of at least ``shadow_min_texture`` grey levels.
     ghost_every : int, default 10
         Frames between ghost tests (0 never).
@@ -216,8 +216,10 @@ class ColourBackground:
         np.clip(floor, 0.35, 1.0, out=floor)
         floor *= np.float32(self.min_diff)
         thr = cv2.max(cv2.sqrt(self.var) * np.float32(self.k_sigma), floor)
-        if self.shadows:  # the grey background and its local spread (3×3), for shadows
+        if self.shadows:  # the grey background (padded) and its local spread, for shadows
             self._mu_grey = cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY)
+            self._mu_grey_pad = cv2.copyMakeBorder(self._mu_grey, 1, 1, 1, 1,
+                                                   cv2.BORDER_REPLICATE)
             grey = self._mu_grey.astype(np.float32)
             mean = cv2.blur(grey, (3, 3))
             self._mu_spread = cv2.sqrt(cv2.max(cv2.blur(grey * grey, (3, 3)) - mean * mean, 0.0))
@@ -288,39 +290,44 @@ class ColourBackground:
 
     def _remove_shadows(self, img: Image, fg: Image, cand: Image) -> None:
         """Shadow pixels of ``fg`` set to 0 (the test of the module docstring, on the
-        candidates ``cand`` only: the ratio first, then the colour or the texture)."""
+        candidates ``cand`` only: the ratio first, then the colour or the texture).
+        Integer arithmetic on the gathered pixels; the windows are read from padded grey
+        images by flat index, without bounds checks."""
         pts = cv2.findNonZero(cand)
         if pts is None:
             return
+        w = fg.shape[1]
         pts = pts.reshape(-1, 2)
-        cols, rows = pts[:, 0], pts[:, 1]
-        f = img[rows, cols].astype(np.float32)
-        m = self._mu8[rows, cols].astype(np.float32)
-        lf = f.sum(axis=1) + 3.0
-        lm = m.sum(axis=1) + 3.0
-        ratio = lf / lm
+        idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
+        f = img.reshape(-1, 3)[idx].astype(np.int32) + 1
+        m = self._mu8.reshape(-1, 3)[idx].astype(np.int32) + 1
+        lf, lm = f.sum(axis=1), m.sum(axis=1)
         lo, hi = self.shadow_ratio
-        sel = (ratio >= lo) & (ratio <= hi)
+        sel = (lf >= lo * lm) & (lf <= hi * lm)
         if not sel.any():
             return
-        rows, cols, f, m, lf, lm, ratio = (v[sel] for v in (rows, cols, f, m, lf, lm, ratio))
-        grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
-        bg = self._mu_grey
-        # the colour kept and no texture of its own (a flat surface in the shade) ...
-        chroma = np.abs((f + 1.0) / lf[:, None] - (m + 1.0) / lm[:, None]).sum(axis=1)
-        shadow = chroma < self.shadow_chroma
-        if shadow.any():
-            s_f, _, _ = _window_stats(grey, None, rows[shadow], cols[shadow], 1)
-            flat = s_f <= ratio[shadow] * self._mu_spread[rows[shadow], cols[shadow]] + (
+        idx, f, m, lf, lm = idx[sel], f[sel], m[sel], lf[sel], lm[sel]
+        # the colour kept: Σ_c |f_c / L_f − m_c / L_m| < τ, multiplied out by L_f L_m
+        cross = np.abs(f * lm[:, None] - m * lf[:, None]).sum(axis=1)
+        shadow = cross < self.shadow_chroma * (lf * lm).astype(np.float64)
+        grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
+                                  cv2.BORDER_REPLICATE)
+        pidx = idx + (idx // w) * 2 + (w + 2) + 1  # the same pixels in the padded images
+        if shadow.any():  # ... and no texture of its own (a flat surface in the shade)
+            at = pidx[shadow]
+            s_f, _, _ = _window_stats(grey, None, at, w + 2)
+            ratio = lf[shadow] / lm[shadow]
+            flat = s_f <= ratio * self._mu_spread.reshape(-1)[idx[shadow]] + (
                 self.shadow_texture)
             shadow[np.flatnonzero(shadow)[~flat]] = False
         # ... or the background's texture kept under a change of colour (a shadow lit by the
-        # blue sky): the frame correlates with a textured background
+        # blue sky): the frame correlates with a textured background (3×3)
         rest = np.flatnonzero(~shadow)
+        rest = rest[self._mu_spread.reshape(-1)[idx[rest]] > self.shadow_min_texture]
         if rest.size:
-            s_f, s_m, rho = _window_stats(grey, bg, rows[rest], cols[rest], 2)
-            shadow[rest] = (rho > self.shadow_correlation) & (s_m > self.shadow_min_texture)
-        fg[rows[shadow], cols[shadow]] = 0
+            _, _, rho = _window_stats(grey, self._mu_grey_pad, pidx[rest], w + 2)
+            shadow[rest] = rho > self.shadow_correlation
+        fg.reshape(-1)[idx[shadow]] = 0
 
     def _remove_ghosts(self, img: Image, fg: Image) -> None:
         if not cv2.countNonZero(fg):
@@ -347,36 +354,32 @@ class ColourBackground:
         self.mean, self.var, self._run = mean, var, run
 
 
-def _window_stats(a: Image, b: Image | None, rows: NDArray[np.intp], cols: NDArray[np.intp],
-                  radius: int) -> tuple[NDArray[np.float32], NDArray[np.float32],
-                                        NDArray[np.float32]]:
-    """Over the ``(2 radius + 1)²`` window of each pixel (clamped at the border), gathered at
-    the pixels only: the standard deviations of ``a`` and ``b`` and their correlation
-    (``b`` None: zeros for the last two)."""
-    h, w = a.shape
-    n = rows.size
+def _window_stats(a: Image, b: Image | None, at: NDArray[np.intp], stride: int
+                  ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]]:
+    """Over the 3×3 window of the pixels at flat indices ``at`` of images padded by one pixel
+    (row length ``stride``), gathered at those pixels only: the standard deviations of ``a``
+    and ``b`` and their correlation (``b`` None: zeros for the last two)."""
+    fa = a.reshape(-1)
+    fb = None if b is None else b.reshape(-1)
+    n = at.size
     sa, saa = np.zeros(n, np.float32), np.zeros(n, np.float32)
     sb, sbb, sab = (np.zeros(n, np.float32) for _ in range(3))
-    for dy in range(-radius, radius + 1):  # the window's offsets, not the pixels
-        r = np.clip(rows + dy, 0, h - 1)
-        for dx in range(-radius, radius + 1):
-            c = np.clip(cols + dx, 0, w - 1)
-            va = a[r, c].astype(np.float32)
-            sa += va
-            saa += va * va
-            if b is not None:
-                vb = b[r, c].astype(np.float32)
-                sb += vb
-                sbb += vb * vb
-                sab += va * vb
-    k = float((2 * radius + 1) ** 2)
-    ma = sa / k
-    va = np.maximum(saa / k - ma * ma, 0.0)
-    if b is None:
+    for off in (-stride - 1, -stride, -stride + 1, -1, 0, 1, stride - 1, stride, stride + 1):
+        va = fa[at + off].astype(np.float32)  # the nine offsets, not the pixels
+        sa += va
+        saa += va * va
+        if fb is not None:
+            vb = fb[at + off].astype(np.float32)
+            sb += vb
+            sbb += vb * vb
+            sab += va * vb
+    ma = sa / 9.0
+    va = np.maximum(saa / 9.0 - ma * ma, 0.0)
+    if fb is None:
         return np.sqrt(va), sb, sb
-    mb = sb / k
-    vb = np.maximum(sbb / k - mb * mb, 0.0)
-    cov = sab / k - ma * mb
+    mb = sb / 9.0
+    vb = np.maximum(sbb / 9.0 - mb * mb, 0.0)
+    cov = sab / 9.0 - ma * mb
     return np.sqrt(va), np.sqrt(vb), cov / np.sqrt(va * vb + 1e-3)
 
 

@@ -51,23 +51,19 @@ class TrackFeedback:
     tracks that came from plain blobs, move at least ``min_speed`` pixels per frame and have
     been measured in the last ``min_run`` frames in a row teach the size prior (leaves and
     flags that flicker in place are not objects); :attr:`predicted` holds the confirmed
-    tracks' boxes for the next frame. With ``min_travel`` a track teaches only once its
-    measured centre is at least ``min_travel`` times its box's longer side from where it
-    was first measured: clutter that jitters in place has a speed, but goes nowhere.
+    tracks' boxes for the next frame.
     """
 
     def __init__(
         self, frontend: SceneFrontEnd, *, learn: bool = True, min_speed: float = 1.0,
-        min_run: int = 5, min_travel: float | None = None,
+        min_run: int = 5,
     ) -> None:
         self.frontend = frontend
         self.learn = bool(learn)
         self.min_speed = float(min_speed)
         self.min_run = int(min_run)
-        self.min_travel = None if min_travel is None else float(min_travel)
         self.predicted: FloatArray | None = None
         self._run = np.zeros(1, np.int64)  # consecutive measured frames, by public track ID
-        self._first = np.full((1, 2), np.nan)  # first measured centre, by public track ID
 
     def observe(self, dets: Detections, flags: NDArray[np.int8], tf: TrackFrame) -> None:
         """Learn from frame ``tf`` (whose detections were ``dets`` with ``flags``)."""
@@ -76,22 +72,13 @@ class TrackFeedback:
             ids = tf.track_id
             run = self._run
             if ids.max() >= len(run):
-                grow = 2 * int(ids.max()) + 1 - len(run)
-                run = np.concatenate([run, np.zeros(grow, np.int64)])
+                run = np.concatenate([run, np.zeros(2 * int(ids.max()) + 1 - len(run), np.int64)])
                 self._run = run
-                self._first = np.concatenate([self._first, np.full((grow, 2), np.nan)])
             measured = (ids > 0) & (tf.det_index >= 0)
             prev = run[np.maximum(ids, 0)]
             run[:] = 0
             run[ids[measured]] = prev[measured] + 1
             hit = measured & (speed >= self.min_speed) & (run[np.maximum(ids, 0)] >= self.min_run)
-            if self.min_travel is not None:  # gone somewhere since first measured
-                first = self._first
-                pos = np.maximum(ids, 0)
-                new = measured & np.isnan(first[pos, 0])
-                first[ids[new]] = tf.measured_xy[new]
-                gone = np.hypot(*(tf.measured_xy - first[pos]).T)
-                hit &= gone >= self.min_travel * tf.wh.max(axis=1)
             rows = tf.det_index[hit]
             boxes = dets.tlwh[rows] if len(rows) else np.zeros((0, 4))
             alone = isolated(dets.tlwh)[rows] if len(rows) else np.zeros(0, bool)

@@ -161,6 +161,7 @@ class KindModel:
         self.max_kinds = int(max_kinds)
         self.min_share = float(min_share)
         self.min_spread = float(min_spread)
+        self.fit_samples = 500
         self.reset()
 
     def reset(self) -> None:
@@ -214,6 +215,8 @@ class KindModel:
         if len(s) < self.min_samples:
             return
         self._since = 0
+        if len(s) > self.fit_samples:  # evenly spaced over the buffer: cost bounded
+            s = s[np.linspace(0, len(s) - 1, self.fit_samples).astype(np.intp)]
         x, y, w, h, wt = s.T
         g = np.sqrt(w * h)
         logwh = np.log(np.column_stack([w, h]))

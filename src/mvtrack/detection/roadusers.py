@@ -15,10 +15,12 @@ r"""The default video front end: any moving road user â€” cars, buses, people â€
 5. boxes smaller than a share of every kind where they stand are clutter and dropped.
 
 The kinds and their sizes at every image position (:class:`~mvtrack.detection.kinds.KindModel`)
-are learnt from the scene itself: from the boxes of the tracks the tracker follows on their own
-(isolated, moving, confirmed, from plain blobs; :class:`~mvtrack.detection.feedback.TrackFeedback`),
-after each tracker step (:meth:`RoadUserDetector.observe`). Nothing assumes people or cars:
-until the model has its first samples, steps 4 and 5 wait.
+are learnt from the scene itself: from its blobs, as found (not the boxes made of them, so
+the model does not feed on its own decisions), each weighted by its area, so that clutter and
+fragments weigh little; the kinds that hold a share of that weight are the scene's objects
+(cars and the pairs of cars that merge in dense traffic on a highway; walkers on a campus).
+Nothing assumes people or cars: until the model has its first samples, steps 4 and 5 wait.
+The tracker's predicted boxes come back after each step (:meth:`RoadUserDetector.observe`).
 
 Boxes come back in the input frame's pixels (the blob's bounding box, not a box around its
 centroid); :attr:`RoadUserDetector.flags` says for each whether it is plain, merged or split;
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Iterator
+
 import cv2
 import numpy as np
 from numpy.typing import NDArray
@@ -44,7 +47,6 @@ from mvtrack.detection.splitmerge import (
     PLAIN,
     SPLIT,
     blob_claims,
-    merge_fragments,
     split_by_tracks,
     usable_predictions,
 )
@@ -69,7 +71,7 @@ class RoadUserDetector:
         frames (read ahead by :meth:`prepare`), or from the first frame.
     bootstrap_frames : int, default 20
     learn : bool, default True
-        Learn the scene's kinds from the tracker's tracks (:meth:`observe`).
+        Learn the scene's kinds from its blobs.
     scale : float, default 1
         Working scale: the frame is reduced by it before modelling (``cv2.INTER_AREA``).
     min_area : float, default 40
@@ -89,9 +91,6 @@ class RoadUserDetector:
     max_z : float, default 2.5
         A part of a cut blob must be one object of some kind within this distance
         (:meth:`~mvtrack.detection.kinds.KindModel.match`), else the blob stays whole.
-    trim : float, default 0.2
-        A blob's box leaves out its end columns holding less than this share of its fullest
-        column (the thin tail of a cast shadow; :func:`trim_columns`); 0 keeps the extent.
     hold : bool, default True
         Keep the pixels inside the boxes the tracker predicts for its confirmed tracks out
         of the background's update (mean and noise), up to ``absorb_after`` frames: a car
@@ -103,7 +102,7 @@ class RoadUserDetector:
     Attributes
     ----------
     kinds : KindModel
-        The scene's kinds, learnt from the tracks.
+        The scene's kinds, learnt from the blobs.
     flags : (M,) int8
         Plain / merged / split flag of each box of the last frame.
     """
@@ -116,7 +115,6 @@ class RoadUserDetector:
         bootstrap: str = "start",
         bootstrap_frames: int = 20,
         learn: bool = True,
-        learn_from: str = "blobs",
         scale: float = 1.0,
         min_area: float = 40.0,
         close_size: int = 5,
@@ -125,11 +123,9 @@ class RoadUserDetector:
         valley: float = 0.5,
         small: float = 0.2,
         max_z: float = 2.5,
-        trim: float = 0.2,
         close_frac: float = 0.3,
         close_bands: int = 8,
         hold: bool = True,
-        track_merge: bool = True,
         alpha: float = 0.02,
         alpha_slow: float = 0.0,
         absorb_after: int = 600,
@@ -158,12 +154,9 @@ class RoadUserDetector:
             alpha=alpha, alpha_slow=alpha_slow, absorb_after=absorb_after, k_sigma=k_sigma,
             min_diff=min_diff, jitter=jitter, shadows=shadows, ghost_every=ghost_every)
         self.kinds = KindModel()
-        # the tracker's predicted boxes, for blobs that several tracks share; the tracks that
-        # have travelled teach the kinds (clutter jitters in place)
-        self.learn_from = learn_from
-        self.feedback = TrackFeedback(self, learn=bool(learn) and learn_from == "tracks",  # type: ignore[arg-type]
-                                      min_travel=1.0)
-        self.learn_kinds = bool(learn) and learn_from == "blobs"
+        # the tracker's predicted boxes (for blobs that several tracks share, and held)
+        self.feedback = TrackFeedback(self, learn=False)  # type: ignore[arg-type]
+        self.learn_kinds = bool(learn)
         self.bootstrap = bootstrap
         self.bootstrap_frames = int(bootstrap_frames)
         self.scale = float(scale)
@@ -173,8 +166,6 @@ class RoadUserDetector:
         self.small = float(small)
         self.max_z = float(max_z)
         self.hold = bool(hold)
-        self.track_merge = bool(track_merge)
-        self.trim = float(trim)
         self.close_frac = float(close_frac)
         self.close_bands = int(close_bands)
         self._open = np.ones((3, 3), np.uint8)
@@ -261,12 +252,6 @@ class RoadUserDetector:
         frame."""
         self.feedback.observe(dets, self.flags, tracks)
 
-    def learn(self, tlwh: FloatArray) -> None:
-        """Teach the kinds boxes (input pixels) of tracked objects, off the border."""
-        b = np.asarray(tlwh, np.float64).reshape(-1, 4)
-        if len(b):
-            self.kinds.update(b[~self._at_border(b)])
-
     def reset(self) -> None:
         """Forget the background (the kinds are kept)."""
         self.background.reset()
@@ -343,20 +328,13 @@ class RoadUserDetector:
         flags = np.full(len(boxes), PLAIN, np.int8)
         if len(boxes) == 0:
             return boxes, flags, area
-        if self.trim > 0:
-            boxes = trim_columns(labels, ids, boxes, self.trim)
         kinds = self.kinds
         if self.learn_kinds:  # the blobs as found (not the boxes made of them), off the border
             inp = self.to_input(boxes)
             kinds.update(inp[~self._at_border(inp)])
         pred = self.feedback.predicted
         pred = usable_predictions(None if pred is None else self.to_work(pred))
-        # 3. fragments inside one track's predicted box joined, blobs that two or more tracks
-        # predict into divided among them
-        if self.track_merge and len(pred) and len(boxes) >= 2:
-            merged, mflags = merge_fragments(boxes, pred)
-            if (mflags == MERGED).any():
-                return self._tidy(merged, mflags, merged[:, 2] * merged[:, 3])
+        # 3. blobs that two or more tracks predict into divided among them
         k_of = np.zeros(len(boxes), np.int64)
         if len(pred) >= 2:
             home, claims = blob_claims(boxes, pred, 0.5)
@@ -428,29 +406,3 @@ class RoadUserDetector:
         share = (inp[:, None, 2] * inp[:, None, 3]) / exp.prod(axis=2)
         ok = (share.max(axis=1) >= self.small) | self._at_border(inp)
         return boxes[ok], flags[ok], area[ok]
-
-
-def trim_columns(labels: NDArray[np.integer], ids: NDArray[np.intp], boxes: FloatArray,
-                 trim: float) -> FloatArray:
-    """The blobs' boxes without their end columns holding less than ``trim`` of the blob's
-    fullest column: the thin tail of a shadow cast along the ground is cut off, a body (a
-    car, a person) keeps its width. One pass over the blobs' pixels, no loop over blobs."""
-    sel = labels > 0
-    lab = labels[sel]
-    col = np.nonzero(sel)[1]
-    n = int(labels.max()) + 1
-    where = np.full(n, -1)
-    where[ids] = np.arange(len(ids))
-    keep = where[lab] >= 0
-    row_of, col = where[lab[keep]], col[keep]
-    x0 = boxes[:, 0] + 0.5
-    rel = (col - x0[row_of]).astype(np.int64)
-    width = int(boxes[:, 2].max())
-    counts = np.bincount(row_of * width + rel, minlength=len(ids) * width).reshape(len(ids), width)
-    full = counts >= trim * counts.max(axis=1, keepdims=True)
-    first = full.argmax(axis=1)
-    last = width - 1 - full[:, ::-1].argmax(axis=1)
-    out = boxes.copy()
-    out[:, 0] = x0 + first - 0.5
-    out[:, 2] = last - first + 1
-    return out

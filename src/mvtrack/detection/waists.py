@@ -42,6 +42,19 @@ def _cut(profile: NDArray[np.int64], lo: int, hi: int, valley: float) -> int:
     return c if profile[c] <= valley * min(left, right) else -1
 
 
+def _profiles(m: NDArray[np.bool_], axis: int) -> tuple[NDArray[np.int64], ...]:
+    """The count profile of a blob along ``axis`` (pixels per column, ``axis`` 0, or per
+    row), and for columns also its upper envelope (the blob's height above its lowest row in
+    each column): objects side by side on the ground dip between their tops even where their
+    lower parts overlap."""
+    counts = m.sum(axis=axis).astype(np.int64)
+    if axis != 0:
+        return (counts,)
+    rows = m.shape[0]
+    top = np.where(m.any(axis=0), m.argmax(axis=0), rows)
+    return counts, (rows - top).astype(np.int64)
+
+
 def cut_at_waists(
     labels: NDArray[np.integer], label: NDArray[np.intp], boxes: FloatArray,
     part: FloatArray, *, over: float = 1.5, min_part: float = 0.5, valley: float = 0.5,
@@ -77,7 +90,7 @@ def cut_at_waists(
     src: list[int] = []
     for i in range(len(label)):  # the few blobs longer than one object
         x0, y0 = int(boxes[i, 0] + 0.5), int(boxes[i, 1] + 0.5)
-        w, h = int(round(boxes[i, 2])), int(round(boxes[i, 3]))
+        w, h = round(boxes[i, 2]), round(boxes[i, 3])
         sub = labels[y0 : y0 + h, x0 : x0 + w] == label[i]
         ew, eh = float(part[i, 0]), float(part[i, 1])
         todo = [(0, 0, w, h)]
@@ -97,13 +110,13 @@ def cut_at_waists(
                 for axis, length, size in ((0, sw, ew), (1, sh, eh)):
                     if length < over * size:
                         continue
-                    profile = m.sum(axis=axis).astype(np.int64)
                     margin = max(int(min_part * size), 1)
-                    c = _cut(profile, margin, length - margin, valley)
-                    if c > 0:
-                        depth = profile[c] / max(int(profile.max()), 1)
-                        if best is None or depth < best[2]:
-                            best = (axis, c, depth)
+                    for profile in _profiles(m, axis):
+                        c = _cut(profile, margin, length - margin, valley)
+                        if c > 0:
+                            depth = profile[c] / max(int(profile.max()), 1)
+                            if best is None or depth < best[2]:
+                                best = (axis, c, depth)
             if best is None:
                 out.append((x0 + sx - 0.5, y0 + sy - 0.5, float(sw), float(sh)))
                 src.append(i)
