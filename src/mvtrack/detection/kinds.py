@@ -300,8 +300,8 @@ class KindModel:
 
         .. math:: z = \\big\\| (\\log(w / n_x W_k S), \\log(h / n_y H_k S)) / \\sigma_k \\big\\|,
 
-        plus :math:`\\log(n_x n_y) / \\sigma_k` per extra object (one object is the simpler
-        explanation), is least.
+        plus :math:`\\log_2(n_x n_y)` (one object is the simpler explanation: a spread more
+        for each doubling), is least.
 
         Returns
         -------
@@ -324,7 +324,7 @@ class KindModel:
                 - np.log(exp[:, :, None, :]))  # (M, K, C, 2)
         sd = self.spread[None, :, None, :]
         z = np.sqrt(((logr / sd) ** 2).sum(axis=3))
-        penalty = np.log(nxy.prod(axis=1))[None, None, :] / sd.mean(axis=3)
+        penalty = np.log2(nxy.prod(axis=1))[None, None, :]
         cost = (z + penalty).reshape(m, -1)
         best = cost.argmin(axis=1)
         kk, cc = np.divmod(best, len(counts))
