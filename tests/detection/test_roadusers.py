@@ -338,7 +338,8 @@ def test_fragments_of_one_object_are_joined() -> None:
 
 def test_a_stopped_object_stays_foreground_and_is_absorbed_when_it_parks() -> None:
     """The selective update: an object that stops stays foreground (no fading), is absorbed
-    after ``absorb_after`` frames; once it leaves, no ghost is left."""
+    after ``absorb_after`` frames (within the ``refresh`` frames between two counts); once it
+    leaves, no ghost is left."""
     rng = np.random.default_rng(0)
     bg = np.full((40, 60, 3), 100, np.uint8)
 
@@ -353,9 +354,9 @@ def test_a_stopped_object_stays_foreground_and_is_absorbed_when_it_parks() -> No
     for _ in range(45):
         fg = model.apply(frame(True))
     assert fg[10:20, 20:35].mean() > 250  # still whole after 45 frames
-    for _ in range(10):
+    for _ in range(5 + model.refresh):
         fg = model.apply(frame(True))
-    assert fg[10:20, 20:35].mean() < 5  # absorbed at 50
+    assert fg[10:20, 20:35].mean() < 5  # absorbed at 50 (+ up to refresh)
     model = ColourBackground(absorb_after=500, ghost_every=0)
     model.bootstrap(bg)
     for _ in range(100):
@@ -434,3 +435,30 @@ def test_one_box_per_object_against_truth_matching() -> None:
     r, c = linear_sum_assignment(-iou)
     assert (iou[r, c] >= 0.5).sum() == 2
     assert (iou[0] > 0.1).sum() == 2  # the second box on object 0 counts as a split
+
+
+def test_sparse_sobel_equals_opencvs() -> None:
+    """The ghost test's gradient at the outline pixels only equals ``cv2.Sobel`` there."""
+    import cv2
+
+    from mvtrack.detection.colourbg import _edges, _sobel_at
+
+    g = np.random.default_rng(4).integers(0, 256, (30, 40), dtype=np.uint8)
+    pad = cv2.copyMakeBorder(g, 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+    idx = np.arange(30 * 40)
+    got = _sobel_at(pad, idx + (idx // 40) * 2 + 42 + 1, 42)
+    np.testing.assert_allclose(got, _edges(g).reshape(-1), rtol=1e-5, atol=1e-3)
+
+
+def test_ghost_of_the_first_frames_is_reset() -> None:
+    """An object in the bootstrap background that has left is a ghost: its outline has the
+    background's edges and none of the frame's; it is reset within ``ghost_every`` frames."""
+    bg = np.full((40, 60, 3), 100, np.uint8)
+    with_car = bg.copy()
+    with_car[10:20, 20:35] = (30, 60, 200)
+    model = ColourBackground(ghost_every=2)
+    model.bootstrap(with_car)  # the car stood in the first frames, then drove off
+    masks = [model.apply(bg).copy() for _ in range(3)]
+    assert masks[0][11:19, 21:34].mean() > 250  # the ghost, before the test
+    assert masks[-1].max() == 0  # reset
+    assert np.allclose(model.mean[10:20, 20:35], 100.0)

@@ -51,8 +51,10 @@ shadow lit by the blue sky: the 3×3 correlation of frame and background above
 (sparse gathers), not on the whole frame.
 
 Cost: the mean, its neighbourhood extremes and the threshold map of eq. (2) are refreshed every
-``refresh`` frames (they change at the rate α); every frame costs two saturated subtractions,
-two channel maxima, one compare and the masked updates — all ``uint8`` or one-channel passes.
+``refresh`` frames (they change at the rate α), and so are the noise and the count of frames a
+pixel has been busy (a pixel is absorbed within ``refresh`` frames of ``absorb_after``); every
+frame costs two saturated subtractions, two channel maxima, one compare and the masked update
+of the mean — all ``uint8`` or one-channel passes but the last.
 """
 
 from __future__ import annotations
@@ -63,15 +65,25 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.detection.ghosts import ghost_pixels
-
 Image = NDArray[np.uint8]
+
+#: a blob is a ghost when its outline's edges in the background are this many times its
+#: edges in the frame (:func:`~mvtrack.detection.ghosts.ghost_blobs`)
+GHOST_RATIO = 2.0
+
+
+_ROW3 = np.ones((1, 3), np.uint8)
 
 
 def _channel_max(img: Image) -> Image:
-    """Largest of the three channels per pixel (elementwise OpenCV passes)."""
-    b, g, r = cv2.split(img)
-    return cv2.max(cv2.max(b, g), r)
+    """Largest of the three channels per pixel: the interleaved row ``b g r b g r ...``
+    dilated by a 1×3 window anchored at its left end holds each pixel's maximum at the
+    pixel's first channel (one pass and a strided copy, about twice as fast as splitting the
+    channels)."""
+    h, w = img.shape[:2]
+    row = cv2.dilate(img.reshape(h, 3 * w), _ROW3, anchor=(0, 0),
+                     borderType=cv2.BORDER_REPLICATE)
+    return np.ascontiguousarray(row[:, ::3])
 
 
 class ColourBackground:
@@ -107,10 +119,14 @@ class ColourBackground:
         A candidate whose colour changed is a shadow when the frame's grey levels correlate
         with the background's over a 3×3 window by more than ``shadow_correlation`` and the
         background has a local spread of at least ``shadow_min_texture`` grey levels.
+    shadow_step : int, default 2
+        The shadow test runs on every ``shadow_step``-th candidate of each row and column,
+        each tested pixel deciding for its cell (a shadow is a region, not a pixel).
     ghost_every : int, default 10
         Frames between ghost tests (0 never).
-    refresh : int, default 4
-        Frames between refreshes of the threshold map and the neighbourhood extremes.
+    refresh : int, default 8
+        Frames between refreshes of the threshold map and the neighbourhood extremes, and
+        between updates of the noise and of the count that absorbs a pixel.
 
     Attributes
     ----------
@@ -138,8 +154,9 @@ class ColourBackground:
         shadow_texture: float = 2.0,
         shadow_correlation: float = 0.8,
         shadow_min_texture: float = 3.0,
+        shadow_step: int = 2,
         ghost_every: int = 10,
-        refresh: int = 4,
+        refresh: int = 8,
     ) -> None:
         for name, value in (("alpha", alpha), ("alpha_slow", alpha_slow)):
             if not (math.isfinite(value) and 0.0 <= value <= 1.0):
@@ -175,8 +192,12 @@ class ColourBackground:
         self.shadow_texture = float(shadow_texture)
         self.shadow_correlation = float(shadow_correlation)
         self.shadow_min_texture = float(shadow_min_texture)
+        if isinstance(shadow_step, bool) or not isinstance(shadow_step, int) or shadow_step < 1:
+            raise ValueError(f"shadow_step must be a whole number >= 1, got {shadow_step!r}")
+        self.shadow_step = int(shadow_step)
         self.ghost_every = int(ghost_every)
         self.refresh = int(refresh)
+        self._alpha_refresh = 1.0 - (1.0 - self.alpha) ** self.refresh
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -188,6 +209,9 @@ class ColourBackground:
         self.frames_seen = 0
         self._kernel = (None if self.jitter == 0
                         else np.ones((2 * self.jitter + 1,) * 2, np.uint8))
+        level = np.arange(256, dtype=np.float64)  # eq. (2)'s floor of each brightness
+        self._floor_table = np.floor(self.min_diff * np.clip(level / 128.0, 0.35, 1.0)).astype(
+            np.uint8)
         self._stale = True
 
     def bootstrap(self, background: Image) -> None:
@@ -204,7 +228,8 @@ class ColourBackground:
 
     def _refresh(self) -> None:
         """The background as ``uint8``, its neighbourhood extremes and the threshold of
-        eq. (2)."""
+        eq. (2) as ``uint8`` (the noise term rounded, the floor read from a table of the
+        256 brightnesses)."""
         self._mu8 = cv2.convertScaleAbs(self.mean)
         if self._kernel is None:
             self._lo = self._hi = self._mu8
@@ -212,10 +237,11 @@ class ColourBackground:
             self._lo = cv2.erode(self._mu8, self._kernel)
             self._hi = cv2.dilate(self._mu8, self._kernel)
         np.maximum(self.var, np.float32(self.min_sigma**2), out=self.var)
-        floor = cv2.multiply(_channel_max(self._mu8), 1.0 / 128.0, dtype=cv2.CV_32F)
-        np.clip(floor, 0.35, 1.0, out=floor)
-        floor *= np.float32(self.min_diff)
-        thr = cv2.max(cv2.sqrt(self.var) * np.float32(self.k_sigma), floor)
+        noise = cv2.convertScaleAbs(cv2.sqrt(self.var), alpha=self.k_sigma)  # λ σ
+        floor = cv2.LUT(_channel_max(self._mu8), self._floor_table)
+        self._thr = cv2.min(cv2.max(noise, floor), 254.0)
+        if self.ghost_every:  # the background's edges, for the ghost test
+            self._mu_edges = _edges(cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY))
         if self.shadows:  # the grey background (padded) and its local spread, for shadows
             self._mu_grey = cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY)
             self._mu_grey_pad = cv2.copyMakeBorder(self._mu_grey, 1, 1, 1, 1,
@@ -223,8 +249,6 @@ class ColourBackground:
             grey = self._mu_grey.astype(np.float32)
             mean = cv2.blur(grey, (3, 3))
             self._mu_spread = cv2.sqrt(cv2.max(cv2.blur(grey * grey, (3, 3)) - mean * mean, 0.0))
-        # d > θ for a whole d  ⟺  d > ⌊θ⌋ : the threshold as uint8 is exact
-        self._thr = np.minimum(np.floor(thr), 254.0).astype(np.uint8)
         self._stale = False
 
     # ------------------------------------------------------------------ frames
@@ -253,14 +277,11 @@ class ColourBackground:
             self._refresh()
         up = cv2.subtract(img, self._hi)  # brighter than the neighbourhood, per channel
         d3 = cv2.max(cv2.subtract(self._lo, img), up)  # eq. (1)
-        d = self._d
-        b, g, r = cv2.split(d3)
-        cv2.max(cv2.max(b, g), r, dst=d)
+        d = self._d = _channel_max(d3)
         fg = cv2.compare(d, self._thr, cv2.CMP_GT, dst=self._fg)  # eq. (2)
         self.distance = d
         if self.shadows:  # a shadow is darker in every channel: not brighter in any
-            b, g, r = cv2.split(up)
-            darker = cv2.compare(cv2.max(cv2.max(b, g), r), 0, cv2.CMP_EQ)
+            darker = cv2.compare(_channel_max(up), 0, cv2.CMP_EQ)
             self._remove_shadows(img, fg, cv2.bitwise_and(fg, darker))
         if self.ghost_every and self.frames_seen % self.ghost_every == 0:
             self._remove_ghosts(img, fg)
@@ -268,19 +289,23 @@ class ColourBackground:
         return fg
 
     def _update(self, img: Image, fg: Image, held: Image | None) -> None:
-        """Eq. (3) and the absorption of long-foreground pixels."""
+        """Eq. (3) every frame for the mean; every ``refresh`` frames for the noise (at the
+        rate of ``refresh`` frames, :math:`1 - (1 - \\alpha)^{refresh}`) and for the count of
+        frames a pixel has been busy (foreground or held), which absorbs it."""
         busy = fg if held is None else cv2.bitwise_or(fg, held)
         learn = cv2.bitwise_not(busy)
         cv2.accumulateWeighted(img, self.mean, self.alpha, mask=learn)  # eq. (3), background
         if self.alpha_slow > 0:
             slow = fg if held is None else cv2.bitwise_and(fg, cv2.bitwise_not(held))
             cv2.accumulateWeighted(img, self.mean, self.alpha_slow, mask=slow)
+        if self.frames_seen % self.refresh:
+            return
         d32 = self._d32
         cv2.multiply(self._d, self._d, dst=d32, dtype=cv2.CV_32F)  # d² on the background
-        cv2.accumulateWeighted(d32, self.var, self.alpha, mask=learn)
+        cv2.accumulateWeighted(d32, self.var, self._alpha_refresh, mask=learn)
         if self.absorb_after:
             run = self._run
-            cv2.add(run, 1.0, dst=run, mask=busy)  # consecutive frames busy
+            cv2.add(run, float(self.refresh), dst=run, mask=busy)  # frames busy in a row
             cv2.bitwise_and(run, 0.0, dst=run, mask=learn)
             done = cv2.compare(run, float(self.absorb_after), cv2.CMP_GE)
             if cv2.countNonZero(done):
@@ -293,11 +318,12 @@ class ColourBackground:
         candidates ``cand`` only: the ratio first, then the colour or the texture).
         Integer arithmetic on the gathered pixels; the windows are read from padded grey
         images by flat index, without bounds checks."""
-        pts = cv2.findNonZero(cand)
+        grid = cand[:: self.shadow_step, :: self.shadow_step]
+        pts = cv2.findNonZero(grid)
         if pts is None:
             return
         w = fg.shape[1]
-        pts = pts.reshape(-1, 2)
+        pts = pts.reshape(-1, 2) * self.shadow_step
         idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
         f = img.reshape(-1, 3)[idx].astype(np.int32) + 1
         m = self._mu8.reshape(-1, 3)[idx].astype(np.int32) + 1
@@ -327,19 +353,50 @@ class ColourBackground:
         if rest.size:
             _, _, rho = _window_stats(grey, self._mu_grey_pad, pidx[rest], w + 2)
             shadow[rest] = rho > self.shadow_correlation
-        fg.reshape(-1)[idx[shadow]] = 0
+        if self.shadow_step == 1:
+            fg.reshape(-1)[idx[shadow]] = 0
+            return
+        # each tested pixel speaks for its cell of the grid: the cells of the shadow pixels
+        # are cleared where they were candidates
+        step = self.shadow_step
+        cells = np.zeros_like(grid)
+        at = idx[shadow]
+        cells.reshape(-1)[(at // w // step) * grid.shape[1] + at % w // step] = 255
+        full = cv2.resize(cells, None, fx=step, fy=step, interpolation=cv2.INTER_NEAREST)
+        full = full[: fg.shape[0], : fg.shape[1]]
+        clear = cv2.bitwise_and(full, cand[: full.shape[0], : full.shape[1]])
+        cv2.bitwise_and(fg, cv2.bitwise_not(clear), dst=fg)
 
     def _remove_ghosts(self, img: Image, fg: Image) -> None:
-        if not cv2.countNonZero(fg):
+        """Ghost blobs of ``fg`` reset to the frame and cleared: the test of
+        :func:`~mvtrack.detection.ghosts.ghost_blobs` (the outline's edges are the
+        background's, not the frame's), with the background's edges kept from the last
+        refresh and the frame's computed on the outline pixels only."""
+        n, labels = cv2.connectedComponents(fg, connectivity=8, ltype=cv2.CV_32S)
+        if n <= 1:
             return
-        grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
-        bg = cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY)
-        sel = ghost_pixels(fg, grey, bg)
-        if sel is None:
+        outline = cv2.bitwise_and(fg, cv2.bitwise_not(cv2.erode(fg, None)))
+        pts = cv2.findNonZero(outline)
+        if pts is None:
             return
-        self.mean[sel] = img[sel]
-        fg[sel] = 0
-        self._run[sel] = 0
+        w = fg.shape[1]
+        pts = pts.reshape(-1, 2)
+        idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
+        grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
+                                  cv2.BORDER_REPLICATE)
+        e_frame = _sobel_at(grey, idx + (idx // w) * 2 + (w + 2) + 1, w + 2)
+        e_back = self._mu_edges.reshape(-1)[idx]
+        lab = labels.reshape(-1)[idx]
+        s_frame = np.bincount(lab, e_frame, minlength=n)
+        s_back = np.bincount(lab, e_back, minlength=n)
+        ghost = (s_back > GHOST_RATIO * s_frame).astype(np.uint8) * np.uint8(255)
+        ghost[0] = 0
+        if not ghost.any():
+            return
+        sel = ghost[labels]
+        cv2.accumulateWeighted(img, self.mean, 1.0, mask=sel)  # reset to the frame
+        cv2.bitwise_and(fg, cv2.bitwise_not(sel), dst=fg)
+        cv2.bitwise_and(self._run, 0.0, dst=self._run, mask=sel)
         self._stale = True
 
     def rescale(self, size: tuple[int, int]) -> None:
@@ -352,6 +409,24 @@ class ColourBackground:
         run = cv2.resize(self._run, size, interpolation=cv2.INTER_NEAREST)
         self.bootstrap(np.zeros((size[1], size[0], 3), np.uint8))
         self.mean, self.var, self._run = mean, var, run
+
+
+def _sobel_at(grey_pad: Image, at: NDArray[np.intp], stride: int) -> NDArray[np.float64]:
+    """The 3×3 Sobel gradient magnitude of a grey image padded by one pixel (row length
+    ``stride``) at the flat indices ``at`` only (as :func:`cv2.Sobel` with ``ksize=3``)."""
+    g = grey_pad.reshape(-1).astype(np.float64)
+    p = {(dy, dx): g[at + dy * stride + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1)
+         if (dy, dx) != (0, 0)}
+    gx = (p[-1, 1] + 2 * p[0, 1] + p[1, 1]) - (p[-1, -1] + 2 * p[0, -1] + p[1, -1])
+    gy = (p[1, -1] + 2 * p[1, 0] + p[1, 1]) - (p[-1, -1] + 2 * p[-1, 0] + p[-1, 1])
+    return np.hypot(gx, gy)
+
+
+def _edges(grey: Image) -> NDArray[np.float32]:
+    """Sobel gradient magnitude (3×3) of a grey image, replicated border."""
+    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    return cv2.magnitude(gx, gy)
 
 
 def _window_stats(a: Image, b: Image | None, at: NDArray[np.intp], stride: int

@@ -126,7 +126,7 @@ class KindModel:
     min_samples : int, default 30
         Samples before the model is ready.
     refit_every : int, default 20
-        New samples between refits (at least a quarter of the samples kept).
+        New samples between refits (at least half the samples kept).
     max_kinds : int, default 3
         Most kinds.
     min_share : float, default 0.1
@@ -161,7 +161,7 @@ class KindModel:
         self.max_kinds = int(max_kinds)
         self.min_share = float(min_share)
         self.min_spread = float(min_spread)
-        self.fit_samples = 500
+        self.fit_samples = 400
         self.reset()
 
     def reset(self) -> None:
@@ -205,7 +205,7 @@ class KindModel:
         self._next = int((self._next + len(rows)) % self.capacity)
         self.n_samples = min(self.n_samples + len(rows), self.capacity)
         self._since += len(rows)
-        due = max(self.refit_every, self.n_samples // 4)  # refits grow rarer as samples pile up
+        due = max(self.refit_every, self.n_samples // 2)  # refits grow rarer as samples pile up
         if self.n_samples >= self.min_samples and (not self.ready or self._since >= due):
             self.fit()
 

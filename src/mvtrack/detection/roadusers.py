@@ -59,6 +59,14 @@ FloatArray = NDArray[np.float64]
 #: how :class:`RoadUserDetector` starts its background
 BOOTSTRAPS = ("start", "none")
 
+#: a box with less than this share of the area of every kind where it stands may be a
+#: fragment of an object (a car broken at its windscreen), and is offered for joining
+FRAGMENT = 0.8
+
+#: frames of the read-ahead (evenly spaced) whose per-pixel median is the first background:
+#: an object must cover a pixel in more than half of them to stay in it
+BOOTSTRAP_MEDIAN = 9
+
 
 
 class RoadUserDetector:
@@ -236,7 +244,7 @@ class RoadUserDetector:
             if head:
                 self.background.bootstrap(
                     temporal_median((self.reduce(f) for f in head),
-                                    max_frames=self.bootstrap_frames))
+                                    max_frames=BOOTSTRAP_MEDIAN))
             yield from head
             del head
             if error is not None:
@@ -318,8 +326,7 @@ class RoadUserDetector:
 
     def _objects(self, mask: Image) -> tuple[FloatArray, NDArray[np.int8], FloatArray]:
         """Object boxes (working pixels), their flags and foreground areas (steps 3–5)."""
-        _, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
-            mask, 8, cv2.CV_32S, cv2.CCL_BBDT)
+        labels, stats = _label(mask)
         ids = np.flatnonzero(stats[:, cv2.CC_STAT_AREA] >= self.min_area)
         ids = ids[ids > 0]
         st = stats[ids].astype(np.float64)
@@ -388,21 +395,36 @@ class RoadUserDetector:
         kinds = self.kinds
         if not kinds.ready or len(boxes) == 0:
             return boxes, flags, area
-        plain = np.flatnonzero(flags == PLAIN)
-        if plain.size >= 2:
-            joined, group = join_fragments(self.to_input(boxes[plain]), kinds)
-            if len(joined) < plain.size:
+        inp = self.to_input(boxes)
+        # each box's area as a share of each kind's where it stands
+        share = (inp[:, None, 2] * inp[:, None, 3]) / kinds.expected(inp).prod(axis=2)
+        # fragments are smaller than a whole object of every kind: only they are joined
+        part = np.flatnonzero((flags == PLAIN) & (share.max(axis=1) < FRAGMENT))
+        if part.size >= 2:
+            joined, group = join_fragments(inp[part], kinds)
+            if len(joined) < part.size:
                 n_new = len(joined)
                 counts = np.bincount(group, minlength=n_new)
-                jarea = np.bincount(group, area[plain], minlength=n_new)
-                keep = np.flatnonzero(flags != PLAIN)
+                jarea = np.bincount(group, area[part], minlength=n_new)
+                keep = np.setdiff1d(np.arange(len(boxes)), part)
                 boxes = np.concatenate([self.to_work(joined), boxes[keep]])
                 flags = np.concatenate([np.where(counts >= 2, MERGED, PLAIN).astype(np.int8),
                                         flags[keep]])
                 area = np.concatenate([jarea, area[keep]])
+                inp = self.to_input(boxes)
+                share = (inp[:, None, 2] * inp[:, None, 3]) / kinds.expected(inp).prod(axis=2)
         # 5. clutter: smaller than `small` of every kind where it stands (not at the border)
-        inp = self.to_input(boxes)
-        exp = kinds.expected(inp)  # (M, K, 2)
-        share = (inp[:, None, 2] * inp[:, None, 3]) / exp.prod(axis=2)
         ok = (share.max(axis=1) >= self.small) | self._at_border(inp)
         return boxes[ok], flags[ok], area[ok]
+
+
+def _label(mask: Image) -> tuple[NDArray[np.integer], NDArray[np.int32]]:
+    """8-connected labels and statistics of ``mask`` (OpenCV's BBDT labeller, 16-bit labels
+    unless there are more than 65535 blobs: less memory traffic, the same result)."""
+    try:
+        _, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+            mask, 8, cv2.CV_16U, cv2.CCL_BBDT)
+    except cv2.error:  # more than 65535 blobs
+        _, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
+            mask, 8, cv2.CV_32S, cv2.CCL_BBDT)
+    return labels, stats

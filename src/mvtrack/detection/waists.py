@@ -155,13 +155,16 @@ def join_fragments(
     if m < 2 or not kinds.ready:
         return b, ident
     lo, hi = b[:, :2], b[:, :2] + b[:, 2:]
-    ulo = np.minimum(lo[:, None, :], lo[None, :, :])
-    uhi = np.maximum(hi[:, None, :], hi[None, :, :])
-    union = np.concatenate([ulo, uhi - ulo], axis=2)  # (M, M, 4)
     iu, ju = np.triu_indices(m, 1)
-    pairs = union[iu, ju]
-    # gap between the two boxes along each axis, in units of the union's kind size
+    # gap between the two boxes along each axis; only pairs closer than the larger of the
+    # two along both axes can be fragments of one object
     gaps = np.maximum(np.maximum(lo[iu] - hi[ju], lo[ju] - hi[iu]), 0.0)
+    close = (gaps <= np.maximum(b[iu, 2:], b[ju, 2:])).all(axis=1)
+    iu, ju, gaps = iu[close], ju[close], gaps[close]
+    if iu.size == 0:
+        return b, ident
+    ulo = np.minimum(lo[iu], lo[ju])
+    pairs = np.concatenate([ulo, np.maximum(hi[iu], hi[ju]) - ulo], axis=1)
     kind_u, parts_u, z_u = kinds.match(pairs)
     one = (parts_u == 1).all(axis=1) & (z_u <= max_z)
     if not one.any():
