@@ -371,11 +371,15 @@ class ColourBackground:
         """Ghost blobs of ``fg`` reset to the frame and cleared: the test of
         :func:`~mvtrack.detection.ghosts.ghost_blobs` (the outline's edges are the
         background's, not the frame's), with the background's edges kept from the last
-        refresh and the frame's computed on the outline pixels only."""
+        refresh and the frame's computed on the outline pixels only, over a band two pixels
+        wide across each blob's border."""
         n, labels = cv2.connectedComponents(fg, connectivity=8, ltype=cv2.CV_32S)
         if n <= 1:
             return
-        outline = cv2.bitwise_and(fg, cv2.bitwise_not(cv2.erode(fg, None)))
+        # the outline as a band across the blob's border (the neighbourhood test of eq. (1)
+        # leaves a blob a pixel inside the object's edge), labelled by the nearest blob
+        outline = cv2.subtract(cv2.dilate(fg, None), cv2.erode(fg, None))
+        labels = cv2.dilate(labels.astype(np.float32), None).astype(np.int32)
         pts = cv2.findNonZero(outline)
         if pts is None:
             return
@@ -393,8 +397,9 @@ class ColourBackground:
         ghost[0] = 0
         if not ghost.any():
             return
-        sel = ghost[labels]
-        cv2.accumulateWeighted(img, self.mean, 1.0, mask=sel)  # reset to the frame
+        sel = cv2.bitwise_and(ghost[labels], fg)
+        # reset to the frame with the ring the neighbourhood test left out of the blob
+        cv2.accumulateWeighted(img, self.mean, 1.0, mask=cv2.dilate(sel, None))
         cv2.bitwise_and(fg, cv2.bitwise_not(sel), dst=fg)
         cv2.bitwise_and(self._run, 0.0, dst=self._run, mask=sel)
         self._stale = True
