@@ -59,8 +59,8 @@ FloatArray = NDArray[np.float64]
 #: how :class:`RoadUserDetector` starts its background
 BOOTSTRAPS = ("start", "none")
 
-#: a box with less than this share of the area of every kind where it stands may be a
-#: fragment of an object (a car broken at its windscreen), and is offered for joining
+#: a box with less than this share of the area of the commonest kind where it stands may be
+#: a fragment of an object (a car broken at its windscreen), and is offered for joining
 FRAGMENT = 0.8
 
 #: frames of the read-ahead (evenly spaced) whose per-pixel median is the first background:
@@ -367,10 +367,19 @@ class RoadUserDetector:
             got, src = cut_at_waists(labels, ids[li], boxes[li], one[li], over=self.over,
                                      min_part=self.min_part, valley=self.valley)
             cut = np.bincount(src, minlength=li.size) >= 2
-            # a cut stands only if every part is one object of some kind where it stands
-            _, parts, z = kinds.match(self.to_input(got))
-            whole = (parts == 1).all(axis=1) & (z <= self.max_z)
-            bad = np.bincount(src, ~whole, minlength=li.size) > 0
+            # a cut stands only if every part is one object of some kind where it stands,
+            # and, if the blob itself is one object of a kind, the parts' kinds are commoner
+            # (two cars side by side against a rarer kind of their size; a two-tone car
+            # against a rarer kind of half-cars)
+            kind_p, parts, z = kinds.match(self.to_input(got))
+            one_p = (parts == 1).all(axis=1) & (z <= self.max_z)
+            common = np.where(one_p, kinds.share[kind_p], 0.0)
+            least = np.full(li.size, np.inf)
+            np.minimum.at(least, src, common)
+            kind_w, parts_w, z_w = kinds.match(self.to_input(boxes[li]))
+            one_w = (parts_w == 1).all(axis=1) & (z_w <= self.max_z)
+            bad = (np.bincount(src, ~one_p, minlength=li.size) > 0) | (
+                one_w & (least <= kinds.share[kind_w]))
             undo = cut & bad
             if undo.any():
                 got = np.concatenate([got[~undo[src]], boxes[li[undo]]])
@@ -398,8 +407,10 @@ class RoadUserDetector:
         inp = self.to_input(boxes)
         # each box's area as a share of each kind's where it stands
         share = (inp[:, None, 2] * inp[:, None, 3]) / kinds.expected(inp).prod(axis=2)
-        # fragments are smaller than a whole object of every kind: only they are joined
-        part = np.flatnonzero((flags == PLAIN) & (share.max(axis=1) < FRAGMENT))
+        # fragments are smaller than a whole object of the commonest kind: only they are
+        # offered for joining
+        common = int(np.argmax(kinds.share))
+        part = np.flatnonzero((flags == PLAIN) & (share[:, common] < FRAGMENT))
         if part.size >= 2:
             joined, group = join_fragments(inp[part], kinds)
             if len(joined) < part.size:

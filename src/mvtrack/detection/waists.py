@@ -131,7 +131,7 @@ def cut_at_waists(
 
 
 def join_fragments(
-    boxes: FloatArray, kinds: KindModel, *, gap: float = 0.25, gain: float = 1.0,
+    boxes: FloatArray, kinds: KindModel, *, gap: float = 0.4, gain: float = 1.0,
     max_z: float = 2.5,
 ) -> tuple[FloatArray, NDArray[np.intp]]:
     """Join blobs that are fragments of one object (module docstring).
