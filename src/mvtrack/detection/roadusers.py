@@ -87,18 +87,21 @@ class RoadUserDetector:
     close_size : int, default 5
         Diameter of the elliptic closing, working pixels (0 or 1: none), until the kinds are
         known.
-    close_frac : float, default 0.3
+    close_frac : float, default 0.2
         Then the closing is an ellipse this share of the smallest kind's width and height
-        where each band of rows stands (0: ``close_size`` always).
+        where each band of rows stands (0: ``close_size`` always). Chosen by leave-one-out
+        over the four US-101 clips and KITTI-17 (every fold: docs/bench/vehicles.md).
     close_bands : int, default 8
         Bands of rows of the closing.
-    over, min_part, valley : float
-        Waist cutting (:func:`~mvtrack.detection.waists.cut_at_waists`).
+    over, min_part, valley : float, default 1.8, 0.5, 0.5
+        Waist cutting (:func:`~mvtrack.detection.waists.cut_at_waists`); ``over`` and
+        ``valley`` chosen by leave-one-out (4 and 3 folds of 5).
     small : float, default 0.2
         Boxes whose area is below this share of every kind's where they stand are dropped.
-    max_z : float, default 2.5
+    max_z : float, default 3
         A part of a cut blob must be one object of some kind within this distance
-        (:meth:`~mvtrack.detection.kinds.KindModel.match`), else the blob stays whole.
+        (:meth:`~mvtrack.detection.kinds.KindModel.match`), else the blob stays whole
+        (leave-one-out: every fold).
     hold : bool, default True
         Keep the pixels inside the boxes the tracker predicts for its confirmed tracks out
         of the background's update (mean and noise), up to ``absorb_after`` frames: a car
@@ -126,12 +129,12 @@ class RoadUserDetector:
         scale: float = 1.0,
         min_area: float = 40.0,
         close_size: int = 5,
-        over: float = 1.5,
+        over: float = 1.8,
         min_part: float = 0.5,
         valley: float = 0.5,
         small: float = 0.2,
-        max_z: float = 2.5,
-        close_frac: float = 0.3,
+        max_z: float = 3.0,
+        close_frac: float = 0.2,
         close_bands: int = 8,
         hold: bool = True,
         alpha: float = 0.02,
