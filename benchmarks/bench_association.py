@@ -215,10 +215,11 @@ def main() -> None:
             "`assign` apart, from Python. `largest cluster` is the number of tracks +",
             "detections in the biggest connected component of the gate graph: the optimal",
             "assignment solves a component of at most 4 tracks and 4 detections by enumeration",
-            "and a larger one with SciPy, so its time grows with the clusters. A gate fixed in",
-            "pixels (euclidean, 10 px) joins neighbours into large clusters once targets are",
-            "about that far apart (N = 10 000: ~14 px); the χ² gates (mahalanobis, coupled)",
-            "follow the filters' uncertainty, and the size term narrows them further.",
+            "and a larger one with SciPy, so its time grows with the clusters. The quadratic",
+            "gates (euclidean, mahalanobis, coupled) find their pairs through a grid of",
+            "detection cells (`mvtrack.association.pairs`), so their time grows with the pairs;",
+            "`iou` (and `coupled-literal`) is not a quadratic form about the prediction and is",
+            "evaluated as a dense N × M matrix (`Gate.matrix`), so its time grows with N × M.",
         ]
         lines += _growth(rows)
         write_text(args.md, "\n".join(lines) + "\n")

@@ -106,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     from mvtrack.tracking import Tracker, preset
 
     lines = [
-        "# The floor of a NumPy step (MOT15 development sequences)", "",
+        "## The floor of a NumPy step (MOT15 development sequences)", "",
         f"Command: `python benchmarks/bench_numpy_floor.py --rounds {args.rounds}"
         + (f" --out {args.out}`" if args.out else "`"), "",
         __doc__.split("\n\n")[1].replace("\n", " "), "",
