@@ -517,12 +517,13 @@ def report(res: Results, combos: list[Combo], command: str) -> str:
     lines += [
         "",
         "*Boxes with true IDs*: the input boxes scored with their true identities and no "
-        "tracking (for test.txt, its own IDs): what the boxes alone give. *Best peer*: the "
-        "best of peerbench's box trackers per metric (it may be two peers), each with its "
-        "settings of `../shared/peerbench/README.md`, scored by peerbench (the default's "
-        "results files scored by peerbench too give "
-        + _peer_check(res) + "). *Recorded earlier*: the best peers of an earlier "
-        "measurement on this machine, configuration not recorded.",
+        "tracking (for test.txt, its own IDs): what the boxes alone give. "
+        + ("*Best peer*: the best of peerbench's box trackers per metric (it may be two "
+           "peers), each with its settings of `../shared/peerbench/README.md`, scored by "
+           "peerbench (the default's results files scored by peerbench too give "
+           + _peer_check(res) + "). " if res.peers else "")
+        + "*Recorded earlier*: the best peers of an earlier measurement on this machine, "
+        "configuration not recorded.",
     ]
     lines += _findings(res, dflt)
     lines += _variants_table(res, prev)
