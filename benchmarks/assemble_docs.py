@@ -20,8 +20,8 @@ ROOT = Path(__file__).resolve().parents[1]
 #: its rules and defaults), then from the filters up to whole videos
 ORDER = (
     "summary", "framerate", "rules", "defaults", "filters", "association", "tracker",
-    "numpy-floor", "mot15", "tud", "pipeline", "frontend", "analytics", "structured", "sim",
-    "batch",
+    "numpy-floor", "mot15", "tud", "pipeline", "frontend", "vehicles", "analytics", "structured",
+    "sim", "batch",
 )
 TITLE = "# Benchmarks\n"
 
