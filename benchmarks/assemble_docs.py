@@ -16,10 +16,12 @@ from pathlib import Path
 from mvtrack.io.atomic import write_text
 
 ROOT = Path(__file__).resolve().parents[1]
-#: fragments in reading order: the summary first, then from the filters up to whole videos
+#: fragments in reading order: the summary, the development benchmark (the frame-rate sweep,
+#: its rules and defaults), then from the filters up to whole videos
 ORDER = (
-    "summary", "filters", "association", "tracker", "tud", "pipeline", "structured", "sim",
-    "batch",
+    "summary", "framerate", "rules", "defaults", "filters", "association", "tracker",
+    "numpy-floor", "mot15", "tud", "pipeline", "frontend", "vehicles", "analytics", "structured",
+    "sim", "batch",
 )
 TITLE = "# Benchmarks\n"
 

@@ -1,10 +1,10 @@
 """KITTI-17 end to end: images → front end → the default tracker → MOTA / IDF1.
 
-Each design is a front end; all feed the same tracker, the default preset at 10 fps with the
-video pipeline's settings for a 1224×370 video (pixel gates and measurement noise scaled by
-``s = sqrt(W H / (320 · 240))``, no size gate), run offline by
+Each design is a front end; all feed the same tracker, the default preset at 10 fps (the same
+configuration for every video: its noise and gates are in box sizes), run offline by
 :func:`mvtrack.tracking.track_detections` (backfill and interpolation on). Designs whose
-front end takes the tracker's predicted boxes run a first online :class:`Tracker` beside it
+front end takes the tracker's predicted boxes run a first online :class:`Tracker` beside it,
+given the image's size as the video pipeline gives it
 (:func:`mvtrack.detection.feedback.detect_with_tracker`); the detections it produced are then
 tracked offline.
 
@@ -53,28 +53,15 @@ VTEST = SHARED / "data" / "vtest.avi"
 FPS = 10.0
 REFERENCE = 320 * 240
 
-#: the figures of the issue, for the table (MOTA, IDF1)
-TODAY = {"disturbance-map": (-1.097, 0.014), "mog2": (-0.469, 0.227)}
+def tracker_config(fps: float = FPS) -> TrackerConfig:
+    """The default preset at ``fps``: what the video pipeline runs on any video (it derives
+    only the image's size, given to the online tracker: :func:`online_tracker`)."""
+    return TrackerConfig(fps=fps)
 
 
-def tracker_config(size: tuple[int, int], fps: float = FPS) -> TrackerConfig:
-    """The default preset with the video pipeline's size-dependent settings for ``size``.
-
-    As the pipeline sets them today: ``measurement_std = 2 s``, the Euclidean gate ``100 s²``,
-    ``second_gate = 20 s``, ``recover_margin = 6 s``, ``size_ref = 50 s`` with
-    ``s² = max(W H / (320 · 240), 1)``, and no size gate (blobs merge and split).
-    """
-    s2 = max(size[0] * size[1] / REFERENCE, 1.0)
-    s = math.sqrt(s2)
-    return TrackerConfig(
-        fps=fps,
-        size_gate=None,
-        measurement_std=round(2.0 * s, 3),
-        gate=round(100.0 * s2, 3),
-        second_gate=round(20.0 * s, 3),
-        recover_margin=round(6.0 * s, 3),
-        size_ref=round(50.0 * s, 3),
-    )
+def online_tracker(size: tuple[int, int], fps: float = FPS) -> Tracker:
+    """The online tracker of a ``size`` (W, H) video, as the video pipeline builds it."""
+    return Tracker(tracker_config(fps), frame_size=(float(size[0]), float(size[1])))
 
 
 def load_frames(seq: Path) -> list[np.ndarray]:
@@ -125,14 +112,14 @@ def _scene(
             return SceneFrontEnd(background=bg, **fe_kw)
 
         if bootstrap == "two-pass":
-            dets, _ = two_pass(frames, make, lambda: Tracker(tracker_config(size)))
+            dets, _ = two_pass(frames, make, lambda: online_tracker(size))
             return dets
         fe = make()
         if bootstrap == "clip":
             fe.bootstrap(frames)
         elif bootstrap == "start":
             fe.bootstrap(frames[:20])
-        return detect_with_tracker(frames, fe, Tracker(tracker_config(size)))
+        return detect_with_tracker(frames, fe, online_tracker(size))
 
     return run
 
@@ -239,7 +226,7 @@ def run_design(name: str, frames: list[np.ndarray], gt: MotTable, out: Path | No
     t0 = time.perf_counter()
     dets = DESIGNS[name][1](frames, size)
     t_front = time.perf_counter() - t0
-    log = track_detections(dets, tracker_config(size))
+    log = track_detections(dets, tracker_config())
     pred = MotTable.from_rows(log.to_mot())
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)

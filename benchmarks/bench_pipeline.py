@@ -57,7 +57,7 @@ from mvtrack.io.video import open_source  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 VTEST = ROOT.parent / "shared" / "data" / "vtest.avi"
 
-#: paper 1 (SPEC §1.4): 30 fps at 320×240 on a Pentium Pro 200 MHz; issue 4's targets
+#: paper 1 (SPEC §1.4): 30 fps at 320×240 on a Pentium Pro 200 MHz; the targets of each size
 PAPER_FPS = 30.0
 TARGETS = {(320, 240): 1000.0, (768, 576): 150.0}
 

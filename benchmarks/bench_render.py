@@ -7,7 +7,7 @@ Rows:
   frames per second; no encoding.
 * ``build`` — a scene builder (``crowd`` with N targets × 300 frames), seconds.
 * ``detections`` — :func:`mvtrack.sim.detections.detections_from_scene` for the crowd with
-  the issue-3 defaults (σ = 2 px, size σ = 1 px, 10 % missed, Poisson(3) clutter), seconds.
+  the crowd scene's defaults (σ = 2 px, size σ = 1 px, 10 % missed, Poisson(3) clutter), seconds.
 
 OpenCV runs on one thread and BLAS is pinned to one thread before NumPy loads. Each figure is
 the median of ``--repeats`` runs, as wall-clock time and as CPU time of the process (the

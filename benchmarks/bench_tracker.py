@@ -28,6 +28,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import math  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
@@ -179,17 +180,15 @@ def variants() -> list[tuple[str, TrackerConfig]]:
 
     return [
         ("default", TrackerConfig()),
-        ("every coasting row output (coast_output = None)", TrackerConfig(coast_output=None)),
-        ("no box-size term in the cost (size_weight = 0)", TrackerConfig(size_weight=0.0)),
-        ("previous default (σ_z 2 px, every coasting row, no size scaling or term)",
-         TrackerConfig(measurement_std=2.0, coast_output=None, size_ref=None, size_weight=0.0)),
-        ("no second stage (10 px only)", TrackerConfig(second_gate=None)),
-        ("one stage, 20 px", TrackerConfig(gate=400.0, second_gate=None)),
-        ("no recovery stage", TrackerConfig(recover_speed=None)),
-        ("Mahalanobis χ² 9.21 + 20 px stage", TrackerConfig(distance="mahalanobis", gate=None)),
-        ("IoU 0.7 (general association path), one stage",
-         TrackerConfig(distance="iou", gate=None, second_gate=None)),
-        ("confirm on 3 hits, coast 0.5 s", TrackerConfig(confirm_hits=3, max_coast=0.5)),
+        ("predictor kalman-cv (the IMM's steady filter alone)",
+         TrackerConfig(predictor="kalman-cv")),
+        ("no size term in the gate (size_noise = None)", TrackerConfig(size_noise=None)),
+        ("every coasting row output (coast_std = inf)", TrackerConfig(coast_std=math.inf)),
+        ("no loss by uncertainty (lost_std = None)", TrackerConfig(lost_std=None)),
+        ("no birth test (birth_iou = None)", TrackerConfig(birth_iou=None)),
+        ("Euclidean 10 px gate", TrackerConfig(distance="euclidean", gate=None)),
+        ("IoU 0.7", TrackerConfig(distance="iou", gate=None)),
+        ("confirm on 3 hits", TrackerConfig(confirm_hits=3)),
         ("greedy instead of optimal", TrackerConfig(assign="greedy")),
         ("kalman-ca (q = 0.05)",
          TrackerConfig(predictor="kalman-ca", predictor_params={"q": 0.05})),
@@ -214,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--assign", default=None)
     ap.add_argument("--gate", type=float, default=None)
     ap.add_argument("--confirm-hits", type=int, default=None)
-    ap.add_argument("--max-coast", type=float, default=None)
+    ap.add_argument("--max-misses", type=int, default=None)
     ap.add_argument("--json", default=None, help="also write the figures to this JSON file")
     ap.add_argument("--scene", choices=("own", "sim"), default="own",
                     help="generate the scene here (own) or with mvtrack.sim (sim)")
@@ -222,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="give every detection a uniform random score in [0, 1] (the score "
                          "stages' worst case: half the boxes low)")
     ap.add_argument("--birth-iou", default=None,
-                    help="TrackerConfig.low_birth_iou (a number, or 'none')")
+                    help="TrackerConfig.birth_iou (a number, or 'none')")
     ap.add_argument("--variants", action="store_true",
                     help="one run of each variant of the default (Markdown rows)")
     args = ap.parse_args(argv)
@@ -245,7 +244,7 @@ def main(argv: list[str] | None = None) -> int:
         for k, v in (
             ("predictor", args.predictor), ("distance", args.distance),
             ("assign", args.assign), ("gate", args.gate),
-            ("confirm_hits", args.confirm_hits), ("max_coast", args.max_coast),
+            ("confirm_hits", args.confirm_hits), ("max_misses", args.max_misses),
         )
         if v is not None
     }

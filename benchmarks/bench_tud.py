@@ -1,33 +1,52 @@
 """Real data: TUD-Campus and TUD-Stadtmitte (the MOTChallenge files shipped inside motmetrics).
 
-Runs the tracker for every predictor × distance × assignment rule on two kinds of detections:
+Two kinds of detections, tracked offline (:func:`mvtrack.tracking.track_detections`, backfill
+and interpolation on) at the sequences' 25 fps and scored against ``gt.txt`` with
+:func:`mvtrack.eval.metrics.evaluate` (MOTA and IDF1 by motmetrics at IoU 0.5, HOTA):
 
 * ``test``  — the boxes of motmetrics' ``test.txt`` (an old tracker's output) with the IDs
   dropped and the confidence set to 1;
 * ``noisy`` — the ground-truth boxes with 10 % of them dropped and Gaussian noise of 5 % of
   the box size added (σ = 0.05·w on left and width, σ = 0.05·h on top and height), seeded.
 
-and scores the results against ``gt.txt`` with :func:`mvtrack.eval.metrics.evaluate` (MOTA,
-IDF1 via motmetrics at IoU 0.5, HOTA via TrackEval). Everything except predictor, distance,
-assignment is the tracker's default configuration (:func:`mvtrack.tracking.default`) at the
-sequences' 25 fps; a distance other than the default's gets its own default gate.
+Three parts:
+
+* **the grid** — every predictor × distance × assignment rule on top of the default
+  configuration (:func:`mvtrack.tracking.default`); a distance other than the default's gets
+  its own default gate;
+* **the variants** — the default with one change at a time: each setting of
+  ``docs/settings.md`` moved up and down, the IMM against its steady filter alone
+  (``kalman-cv``), the offline rows (backfill, interpolation, coasting rows), and the papers'
+  presets (``paper1``, ``paper2``);
+* **the peers** (``--peers-python``) — peerbench's trackers (``../shared/peerbench``, their own
+  interpreter) on the same detection files, scored by peerbench (box trackers only).
+
+``--previous FILE`` puts the figures of an earlier version beside today's: the JSON that
+version's ``bench_tud.py --json`` wrote (``benchmarks/data/tud-previous.json``: the engine
+before the rework, whose default was ``kalman-cv / euclidean / optimal`` with pixel gates).
 
 Usage::
 
-    python benchmarks/bench_tud.py [--seeds 3] [--out docs/bench/tud.md] [--json tud.json]
-    python benchmarks/bench_tud.py --quick          # defaults only, to check the wiring
+    python benchmarks/bench_tud.py --peers-python /work/peers/bin/python \\
+        --previous benchmarks/data/tud-previous.json --out docs/bench/tud.md \\
+        --json benchmarks/data/tud.json
+    python benchmarks/bench_tud.py --quick          # the default only, to check the wiring
 
-Prints one line per run and writes a Markdown report with the full table.
+Prints one line per run and writes a Markdown report with every table.
 """
 
 from __future__ import annotations
 
 import argparse
 import itertools
+import json
 import platform
+import subprocess
 import sys
+import tempfile
 import time
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +54,8 @@ import numpy as np
 
 from mvtrack.eval.metrics import evaluate
 from mvtrack.io.atomic import write_json, write_text
-from mvtrack.io.mot import MotTable, read_tracks
+from mvtrack.io.mot import MotTable, read_tracks, write_detections, write_results
+from mvtrack.tracking import TrackerConfig, default, preset, track_detections
 from mvtrack.types import Detections
 
 SEQUENCES = ("TUD-Campus", "TUD-Stadtmitte")
@@ -43,9 +63,13 @@ FPS = 25.0  # both sequences (MOT15 seqinfo)
 DET_KINDS = ("test", "noisy")
 NOISE = 0.05
 DROP = 0.10
+ROOT = Path(__file__).resolve().parents[1]
+PEERBENCH = ROOT.parent / "shared" / "peerbench"
+METRICS = ("MOTA", "IDF1", "HOTA", "IDSW", "FP", "FN")
 
-#: Best peers measured on this machine (MOTA, IDF1), from the project's issue.
-PEERS: dict[tuple[str, str], tuple[str, float, float]] = {
+#: The best peers recorded earlier on this machine on the same detections (MOTA, IDF1); how
+#: they were configured was not recorded. ``--peers-python`` measures peerbench's peers now.
+RECORDED_PEERS: dict[tuple[str, str], tuple[str, float, float]] = {
     ("TUD-Campus", "test"): ("Stone Soup", 0.599, 0.617),
     ("TUD-Stadtmitte", "test"): ("Stone Soup", 0.587, 0.660),
     ("TUD-Campus", "noisy"): ("supervision ByteTrack", 0.891, 0.943),
@@ -60,14 +84,13 @@ def data_dir() -> Path:
     return Path(motmetrics.__file__).parent / "data"
 
 
-def test_detections(seq: str, num_frames: int) -> list[Detections]:
-    """The boxes of ``test.txt`` as detections (IDs dropped, confidence 1)."""
+def test_table(seq: str) -> MotTable:
+    """The boxes of ``test.txt`` (IDs dropped, confidence 1)."""
     table = read_tracks(data_dir() / seq / "test.txt")
-    table = MotTable(
+    return MotTable(
         table.frame, np.full(len(table), -1), table.tlwh, np.ones(len(table)), table.cls,
         table.visibility,
     )
-    return table.to_detections(num_frames)
 
 
 def noisy_table(gt: MotTable, rng: np.random.Generator) -> MotTable:
@@ -86,9 +109,16 @@ def noisy_table(gt: MotTable, rng: np.random.Generator) -> MotTable:
                     g.visibility[order])
 
 
-def noisy_detections(gt: MotTable, rng: np.random.Generator) -> list[Detections]:
-    """:func:`noisy_table` as per-frame detections (IDs dropped)."""
-    return noisy_table(gt, rng).to_detections(gt.num_frames)
+def inputs(gts: dict[str, MotTable], seeds: int) -> dict[str, list[list[Detections]]]:
+    """The detections of every column (``"seq|kind"``): one run for test.txt, one per seed
+    for the noisy ground truth."""
+    out: dict[str, list[list[Detections]]] = {}
+    for s in SEQUENCES:
+        n = gts[s].num_frames
+        out[f"{s}|test"] = [test_table(s).to_detections(n)]
+        noisy = [noisy_table(gts[s], np.random.default_rng(seed)) for seed in range(seeds)]
+        out[f"{s}|noisy"] = [t.to_detections(n) for t in noisy]
+    return out
 
 
 def oracle(seq: str, gt: MotTable, seeds: int) -> dict[str, dict[str, float]]:
@@ -145,52 +175,38 @@ def test_gaps(seq: str) -> dict[str, Any]:
     return {"gt": len(gt), "inner": inner, "outer": outer, "gaps": sorted(gaps)}
 
 
-#: The defaults before box-size scaling, ``coast_output``, ``backfill``, the size gate and
-#: interpolation (code 2a32458).
-PREVIOUS_DEFAULT: dict[str, Any] = {
-    "size_ref": None, "coast_output": None, "measurement_std": 2.0, "size_weight": 0.0,
-    "backfill": False, "size_gate": None, "interpolate": False,
-}
+def missed_people(rows: np.ndarray, gt: MotTable, least: int = 5) -> list[dict[str, Any]]:
+    """The ground-truth people that ``rows`` (MOTChallenge results) miss in ``least`` frames
+    or more: their ID, first and last missed frame (1-based), and the median over those frames
+    of the largest IoU of their box with another person's (are they missed while they overlap
+    someone?). Matching one-to-one per frame at IoU >= 0.5, as :func:`test_gaps`."""
+    from scipy.optimize import linear_sum_assignment
 
-#: Sensitivity of the default combination: (label, config changes, coasting rows written).
-SENSITIVITY: tuple[tuple[str, dict[str, Any], bool], ...] = (
-    ("default", {}, True),
-    ("default, coasting rows left out", {}, False),
-    ("no interpolation (interpolate = False)", {"interpolate": False}, True),
-    ("no backfill (rows from confirmation on, backfill = False)", {"backfill": False}, True),
-    ("no size gate (size_gate = None)", {"size_gate": None}, True),
-    ("size gate 1.4 (size_gate = 1.4)", {"size_gate": 1.4}, True),
-    ("size gate 2 (size_gate = 2, the previous default)", {"size_gate": 2.0}, True),
-    ("size gate 2.5 (size_gate = 2.5)", {"size_gate": 2.5}, True),
-    ("no recovery stage (recover_speed = None)", {"recover_speed": None}, True),
-    ("no recovery margin (recover_margin = 0)", {"recover_margin": 0.0}, True),
-    ("recovery margin 1 px (recover_margin = 1)", {"recover_margin": 1.0}, True),
-    ("tracks kept 0.5 s (max_coast = 0.5)", {"max_coast": 0.5}, True),
-    ("tracks kept 0.8 s (max_coast = 0.8)", {"max_coast": 0.8}, True),
-    ("second_gate = 15 px", {"second_gate": 15.0}, True),
-    ("no box-size scaling (size_ref = None)", {"size_ref": None}, True),
-    ("size_ref = 40 px", {"size_ref": 40.0}, True),
-    ("every coasting row output (coast_output = None)", {"coast_output": None}, True),
-    ("no box-size term in the cost (size_weight = 0)", {"size_weight": 0.0}, True),
-    ("σ_z = 3 px (measurement_std)", {"measurement_std": 3.0}, True),
-    ("previous default (σ_z 2 px, no size scaling, size term or size gate, every coasting "
-     "row, no backfill or interpolation)", PREVIOUS_DEFAULT, True),
-    ("coast 1 s, every coasting row output (filling test.txt's long gaps)",
-     {"max_coast": 1.0, "coast_output": None}, True),
-    # The best of a 108-point sweep (distance iou/mahalanobis × r × max_coast × coasting rows ×
-    # confirm_hits) on these sequences, seed 0, on top of the previous default: tuned on the
-    # test data itself (with the previous default it gave 0.521 / 0.542, 0.554 / 0.653,
-    # 0.940 / 0.971, 0.982 / 0.991).
-    ("iou distance, r = 400 px², confirm_hits 1, max_coast 0.2 s, every coasting row "
-     "(the best of an earlier sweep on these sequences)",
-     {"distance": "iou", "predictor_params": {"r": 400.0}, "confirm_hits": 1, "max_coast": 0.2,
-      "coast_output": None, "interpolate": False}, True),
-)
+    pred = MotTable.from_rows(rows)
+    missed: dict[int, list[tuple[int, float]]] = {}
+    for f in np.unique(gt.frame):
+        g, p = gt.frame == f, pred.frame == f
+        ok = np.zeros(int(g.sum()), dtype=bool)
+        if p.any():
+            cost = 1.0 - _iou(gt.tlwh[g], pred.tlwh[p])
+            cost[cost > 0.5] = 9.0
+            r, c = linear_sum_assignment(cost)
+            ok[r[cost[r, c] < 9.0]] = True
+        others = _iou(gt.tlwh[g], gt.tlwh[g])
+        np.fill_diagonal(others, 0.0)
+        for i in np.flatnonzero(~ok):
+            missed.setdefault(int(gt.id[g][i]), []).append((int(f) + 1, float(others[i].max())))
+    return [{"id": k, "frames": len(v), "first": v[0][0], "last": v[-1][0],
+             "overlap": float(np.median([o for _, o in v]))}
+            for k, v in sorted(missed.items()) if len(v) >= least]
+
+
+# ------------------------------------------------------------------------------ configurations
 
 
 @dataclass(frozen=True)
 class Combo:
-    """One tracker configuration of the grid."""
+    """One predictor / distance / assignment rule of the grid."""
 
     predictor: str
     distance: str
@@ -201,11 +217,32 @@ class Combo:
         return f"{self.predictor} / {self.distance} / {self.assign}"
 
 
+@dataclass(frozen=True)
+class Variant:
+    """One run of the variants table: a configuration and how its rows are written."""
+
+    label: str
+    config: Callable[[], TrackerConfig]
+    offline: dict[str, bool] = field(default_factory=dict)
+    coasting: bool = True
+
+
+def default_config() -> TrackerConfig:
+    """The tracker's default at the sequences' frame rate."""
+    return default(fps=FPS)
+
+
+def combo_config(combo: Combo) -> TrackerConfig:
+    """``combo`` on top of the default; another distance gets its own default gate."""
+    base = default_config()
+    gate = {} if combo.distance == base.distance else {"gate": None}
+    return base.replace(predictor=combo.predictor, distance=combo.distance,
+                        assign=combo.assign, **gate)
+
+
 def default_combo() -> Combo:
     """The tracker's default predictor, distance and assignment rule."""
-    from mvtrack.tracking import default
-
-    c = default(fps=FPS)
+    c = default_config()
     return Combo(c.predictor, c.distance, c.assign)
 
 
@@ -217,37 +254,84 @@ def grid() -> list[Combo]:
     return [Combo(*c) for c in itertools.product(PREDICTORS, DISTANCES, ASSIGN_RULES)]
 
 
-def run_one(
-    combo: Combo, frames: list[Detections], gt: MotTable, coasting: bool = True,
-    changes: dict[str, Any] | None = None,
-) -> dict[str, Any]:
-    """Track ``frames`` with ``combo`` on top of the default configuration and score it.
+def _changed(**changes: Any) -> Callable[[], TrackerConfig]:
+    return lambda: default_config().replace(**changes)
 
-    ``changes`` replaces further fields of the configuration (sensitivity runs).
-    """
-    from mvtrack.tracking import default, track_detections
 
-    base = default(fps=FPS)
-    fields: dict[str, Any] = {
-        "predictor": combo.predictor, "distance": combo.distance, "assign": combo.assign,
-    }
-    if combo.distance != base.distance:
-        fields["gate"] = None  # the gate is in the distance's units: use its default
-    changes = changes or {}
-    if changes.get("distance", base.distance) != base.distance and "gate" not in changes:
-        changes = {**changes, "gate": None}
-    config = base.replace(**{**fields, **changes})
+def _preset(name: str, **kw: Any) -> Callable[[], TrackerConfig]:
+    return lambda: preset(name, fps=FPS, **kw)
+
+
+def variants() -> list[Variant]:
+    """The default, then one change at a time (the settings of ``docs/settings.md`` but the
+    score thresholds, which change nothing here: every box has the same score)."""
+    d = default_config()
+    v = [
+        Variant("default", _changed()),
+        Variant("coasting rows left out of the results", _changed(), coasting=False),
+        Variant("no backfill (rows from confirmation on)", _changed(),
+                {"backfill_rows": False}),
+        Variant("no interpolation of bridged gaps", _changed(), {"interpolate": False}),
+        Variant("neither (the online tracker's rows)", _changed(),
+                {"backfill_rows": False, "interpolate": False}),
+        Variant("predictor kalman-cv (the IMM's steady filter alone)",
+                _changed(predictor="kalman-cv")),
+        Variant("assign greedy", _changed(assign="greedy")),
+        Variant("gate 5.99 (χ² 95 %)", _changed(gate=5.99)),
+        Variant("gate 13.8 (χ² 99.9 %)", _changed(gate=13.8)),
+    ]
+    steps: tuple[tuple[str, tuple[Any, ...]], ...] = (
+        ("measurement_noise", (0.05, 0.2)),
+        ("accel_noise", (0.5, 2.0)),
+        ("manoeuvre_noise", (10.0, 50.0)),
+        ("velocity_prior", (0.75, 3.0)),
+        ("size_noise", (None, 0.15, 0.4)),
+        ("confirm_hits", (1, 3)),
+        ("min_misses", (0, 6)),
+        ("max_misses", (5, 20)),
+        ("lost_std", (None, 0.2, 0.5)),
+        ("coast_std", (None, float("inf"))),
+        ("birth_iou", (None, 0.5)),
+    )
+    for name, values in steps:
+        for value in values:
+            if value == getattr(d, name):
+                continue
+            v.append(Variant(f"{name} {_value(value)} ({_value(getattr(d, name))})",
+                             _changed(**{name: value})))
+    v += [
+        Variant("preset paper1 (kalman-ca, 20 px circle, nearest)", _preset("paper1")),
+        Variant("preset paper1, rls", _preset("paper1", predictor="rls")),
+        Variant("preset paper2 (kalman-ca, coupled region, nearest)", _preset("paper2")),
+    ]
+    return v
+
+
+def _value(v: Any) -> str:
+    if v is None:
+        return "None"
+    if isinstance(v, float) and v == float("inf"):
+        return "inf"
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+# ------------------------------------------------------------------------------------ running
+
+
+def run_one(config: TrackerConfig, frames: list[Detections], gt: MotTable,
+            coasting: bool = True, offline: dict[str, bool] | None = None,
+            keep: Path | None = None) -> dict[str, Any]:
+    """Track ``frames`` offline with ``config`` and score the rows (``keep``: also write
+    them there as a MOTChallenge results file)."""
     t0 = time.perf_counter()
-    log = track_detections(frames, config)
+    log = track_detections(frames, config, **(offline or {}))
     seconds = time.perf_counter() - t0
     rows = log.to_mot(include_coasting=coasting)
-    pred = MotTable.from_rows(rows)
-    scores = evaluate(gt, pred, iou=0.5)
-    return {
-        "MOTA": scores["MOTA"], "IDF1": scores["IDF1"], "HOTA": scores["HOTA"],
-        "IDSW": scores["IDSW"], "FP": scores["FP"], "FN": scores["FN"],
-        "ms_per_frame": 1000.0 * seconds / max(len(frames), 1),
-    }
+    if keep is not None:
+        write_results(keep, rows)
+    scores = evaluate(gt, MotTable.from_rows(rows), iou=0.5)
+    return {**{k: scores[k] for k in METRICS},
+            "ms_per_frame": 1000.0 * seconds / max(len(frames), 1)}
 
 
 def _mean(runs: list[dict[str, Any]]) -> dict[str, Any]:
@@ -259,28 +343,74 @@ def _mean(runs: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def code_version() -> str:
-    """``git describe`` of the checkout, noting uncommitted changes to the tracking code."""
-    import subprocess
+_FAILED = {**dict.fromkeys(METRICS), "ms_per_frame": float("nan")}
 
-    root = Path(__file__).resolve().parents[1]
+
+def run_column(config: TrackerConfig, runs: list[list[Detections]], gt: MotTable,
+               label: str, **kw: Any) -> dict[str, Any]:
+    """The mean over the runs of one column; a configuration that cannot run is reported,
+    not fatal."""
+    try:
+        return _mean([run_one(config, frames, gt, **kw) for frames in runs])
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # a configuration that cannot run: "–" in the tables
+        print(f"{label}: failed: {exc}", file=sys.stderr)
+        return dict(_FAILED)
+
+
+def run_peers(python: str, gts: dict[str, MotTable], data: dict[str, list[list[Detections]]],
+              default_rows: dict[str, list[Path]], work: Path) -> dict[str, Any]:
+    """peerbench's trackers on every run of every column (box trackers, IoU-scored); the
+    default's results files are scored by peerbench too, as a check of the scoring."""
+    out: dict[str, Any] = {}
+    for key, runs in data.items():
+        seq = key.split("|")[0]
+        gt_path = data_dir() / seq / "gt.txt"
+        per_run: list[dict[str, dict[str, float]]] = []
+        for i, frames in enumerate(runs):
+            det = work / f"{key.replace('|', '-')}-{i}.det.txt"
+            write_detections(det, frames)
+            res = work / f"{key.replace('|', '-')}-{i}.peers.json"
+            cmd = [python, str(PEERBENCH / "run_peers.py"), "--det", str(det),
+                   "--gt", str(gt_path), "--fps", f"{FPS:g}", "--repeats", "1",
+                   "--results", f"mvtrack={default_rows[key][i]}", "--json", str(res)]
+            subprocess.run(cmd, check=True, capture_output=True, timeout=3600)
+            rows = json.loads(res.read_text())["rows"]
+            per_run.append({r["tracker"]: {"MOTA": r["accuracy"]["iou"]["mota"],
+                                           "IDF1": r["accuracy"]["iou"]["idf1"]}
+                            for r in rows if "iou" in r.get("accuracy", {})})
+        names = sorted(set.intersection(*(set(p) for p in per_run)))
+        out[key] = {n: {m: float(np.mean([p[n][m] for p in per_run])) for m in ("MOTA", "IDF1")}
+                    for n in names}
+        print(f"peers {key}: " + ", ".join(
+            f"{n} {v['MOTA']:.3f}/{v['IDF1']:.3f}" for n, v in out[key].items()), flush=True)
+    return out
+
+
+# ------------------------------------------------------------------------------------- report
+
+
+def code_version() -> str:
+    """The short commit of the checkout, noting uncommitted changes to the tracker."""
     try:
         head = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True,
+            ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True,
             check=True,
         ).stdout.strip()
         dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--", "src/mvtrack/tracking",
-             "src/mvtrack/association", "src/mvtrack/filters"],
-            cwd=root, capture_output=True, text=True, check=True,
+            ["git", "status", "--porcelain", "--", "src/mvtrack"],
+            cwd=ROOT, capture_output=True, text=True, check=True,
         ).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
-    return f"{head} (with uncommitted changes to the tracker)" if dirty else head
+    return f"{head} (with uncommitted changes to src/mvtrack)" if dirty else head
 
 
 def _score(r: dict[str, Any]) -> float:
-    """Ranking key of one result: MOTA + IDF1."""
+    """Ranking key of one result: MOTA + IDF1 (a failed run ranks last)."""
+    if r["MOTA"] is None or r["IDF1"] is None:
+        return -np.inf
     return float(r["MOTA"] + r["IDF1"])
 
 
@@ -288,39 +418,59 @@ def _fmt(x: float | None) -> str:
     return "–" if x is None or not np.isfinite(x) else f"{x:.3f}"
 
 
-def report(
-    results: dict[str, dict[str, dict[str, Any]]], combos: list[Combo], default: Combo,
-    command: str, seeds: int, elapsed: float, coasting: bool = True,
-    oracles: dict[str, dict[str, dict[str, float]]] | None = None,
-    sensitivity: dict[str, dict[str, dict[str, Any]]] | None = None,
-    gaps: dict[str, dict[str, Any]] | None = None,
-) -> str:
-    """The Markdown fragment docs/bench/tud.md."""
-    settings = [f"{s}|{k}" for k in DET_KINDS for s in SEQUENCES]
-    label = {f"{s}|{k}": f"{s.removeprefix('TUD-')} {'test.txt' if k == 'test' else 'noisy gt'}"
-             for s in SEQUENCES for k in DET_KINDS}
+def _pair(r: dict[str, Any] | None) -> str:
+    return "–" if r is None else f"{_fmt(r.get('MOTA'))} / {_fmt(r.get('IDF1'))}"
 
-    def mean_score(c: Combo) -> float:
-        return float(np.mean([_score(results[c.name][s]) for s in settings]))
 
-    ranked = sorted(combos, key=mean_score, reverse=True)
-    best_overall = ranked[0]
+def _diff(a: dict[str, Any] | None, b: dict[str, Any] | None) -> str:
+    if a is None or b is None or a.get("MOTA") is None or b.get("MOTA") is None:
+        return "–"
+    return f"{a['MOTA'] - b['MOTA']:+.3f} / {a['IDF1'] - b['IDF1']:+.3f}"
+
+
+@dataclass
+class Results:
+    """Everything one run of this script measured."""
+
+    seeds: int
+    grid: dict[str, dict[str, dict[str, Any]]]
+    variants: dict[str, dict[str, dict[str, Any]]]
+    oracles: dict[str, dict[str, dict[str, float]]]
+    gaps: dict[str, dict[str, Any]]
+    peers: dict[str, Any] | None
+    previous: dict[str, Any] | None
+    previous_path: str
+    elapsed: float
+    missed: dict[str, list[list[dict[str, Any]]]] = field(default_factory=dict)
+
+
+COLUMNS = [f"{s}|{k}" for k in DET_KINDS for s in SEQUENCES]
+LABEL = {f"{s}|{k}": f"{s.removeprefix('TUD-')} {'test.txt' if k == 'test' else 'noisy gt'}"
+         for s in SEQUENCES for k in DET_KINDS}
+
+
+def report(res: Results, combos: list[Combo], command: str) -> str:
+    """The Markdown fragment ``docs/bench/tud.md``."""
+    dflt = default_combo()
+    new = res.grid[dflt.name]
+    prev = res.previous or {}
+    prev_name = prev.get("default", "")
+    prev_default = prev.get("results", {}).get(prev_name)
+    prev_code = prev.get("code", "an earlier version")
     lines = [
         "## Real data: TUD-Campus and TUD-Stadtmitte",
         "",
         "Ground truth and `test.txt` are the MOTChallenge files shipped in motmetrics "
-        "(`motmetrics/data/`). Two kinds of detections: **test.txt** — the boxes of `test.txt` "
-        "(an old tracker's output: recall 0.58 / 0.61) with IDs dropped; **noisy gt** — the "
-        f"ground-truth boxes with {DROP:.0%} dropped and Gaussian noise of {NOISE:.0%} of the "
-        "box size on left/top/width/height "
-        f"({'mean of seeds 0..' + str(seeds - 1) if seeds > 1 else 'seed 0'}). "
-        "MOTA and IDF1 by motmetrics at IoU 0.5, HOTA by TrackEval "
-        "(`mvtrack.eval.metrics.evaluate`). Everything but predictor, distance and assignment "
-        "rule is the tracker's default configuration at 25 fps; where the distance differs "
-        "from the default's, the gate is that distance's default. Rows of coasting (missed, "
-        "predicted) tracks are "
-        + ("included in" if coasting else "left out of")
-        + " the results.",
+        "(`motmetrics/data/`, the same ground truth as `../shared/data/real`). Two kinds of "
+        "detections: **test.txt** — the boxes of `test.txt` (an old tracker's output: recall "
+        "0.58 / 0.61) with IDs dropped; **noisy gt** — the ground-truth boxes with "
+        f"{DROP:.0%} dropped and Gaussian noise of {NOISE:.0%} of the box size on "
+        "left/top/width/height "
+        f"({'mean of seeds 0..' + str(res.seeds - 1) if res.seeds > 1 else 'seed 0'}). Every "
+        "box has the same score, so the score settings (`score_high`, `min_score`, "
+        "`confirm_score`) change nothing here. Tracked offline (`track_detections`: backfill "
+        "and interpolation), coasting rows included, at 25 fps; MOTA and IDF1 by motmetrics "
+        "at IoU 0.5, HOTA by `mvtrack.eval` (`mvtrack.eval.metrics.evaluate`).",
         "",
         "Command:",
         "",
@@ -329,174 +479,170 @@ def report(
         "```",
         "",
         f"Measured on a shared 2-core machine (Python {platform.python_version()}, code "
-        f"{code_version()}); "
-        f"whole grid {elapsed / 60:.1f} min. Peers: the best of several open-source trackers "
-        "measured on this machine on the same detections.",
+        f"{code_version()}); whole run {res.elapsed / 60:.1f} min.",
         "",
-        "### Best peer, our default and our best combination (MOTA / IDF1)",
+        "### The default beside the previous engine and the peers (MOTA / IDF1)",
         "",
-        "| sequence, detections | detections with true IDs | best peer | ours, default "
-        f"({default.name}) | default − peer | ours, best for this column "
-        f"| best overall ({best_overall.name}) |",
-        "|---|---|---|---|---|---|---|",
     ]
-    for s in settings:
-        seq, kind = s.split("|")
-        peer, p_mota, p_idf1 = PEERS[(seq, kind)]
-        d = results[default.name][s]
-        best = max(combos, key=lambda c, s=s: _score(results[c.name][s]))
-        b = results[best.name][s]
-        o = results[best_overall.name][s]
-        orc = (oracles or {}).get(seq, {}).get(kind)
-        orc_text = "–" if orc is None else f"{_fmt(orc['MOTA'])} / {_fmt(orc['IDF1'])}"
-        lines.append(
-            f"| {label[s]} | {orc_text} | {peer} {p_mota:.3f} / {p_idf1:.3f} "
-            f"| {_fmt(d['MOTA'])} / {_fmt(d['IDF1'])} "
-            f"| {d['MOTA'] - p_mota:+.3f} / {d['IDF1'] - p_idf1:+.3f} "
-            f"| {_fmt(b['MOTA'])} / {_fmt(b['IDF1'])} ({best.name}) "
-            f"| {_fmt(o['MOTA'])} / {_fmt(o['IDF1'])} |"
-        )
-    lines += [
-        "",
-        "*Detections with true IDs*: the input boxes scored with their true identities and no "
-        "tracking (for test.txt, its own IDs) — a reference for what the boxes alone give.",
-    ]
-    lines += _summary(results[default.name], settings, label)
-    lines += _chosen_text()
-    if gaps:
-        lines += _gap_text(gaps, sensitivity)
-    if sensitivity:
+    if prev_default is not None:
         lines += [
+            f"*Previous engine*: the default of code {prev_code}, the last before the tracker "
+            f"was rewritten (`{prev_name}` with pixel gates scaled by the box, a second gate, a "
+            "recovery stage and a size gate), measured by that version of this script on the "
+            f"same detections (`{res.previous_path}`). *Default*: today's "
+            f"(`{dflt.name}`, `docs/settings.md`).",
             "",
-            f"### Sensitivity of the default combination ({default.name})",
-            "",
-            "One change at a time to the default (MOTA / IDF1, same detections as above). The "
-            "last row is the best of an earlier sweep on these very sequences (on top of the "
-            "previous default, where it gave 0.521 / 0.542, 0.554 / 0.653, 0.940 / 0.971 and "
-            "0.982 / 0.991), kept for reference.",
-            "",
-            "| setting | " + " | ".join(label[s] for s in settings) + " |",
-            "|---|" + "---|" * len(settings),
         ]
-        for name, res in sensitivity.items():
-            cells = [f"{_fmt(res[s]['MOTA'])} / {_fmt(res[s]['IDF1'])}" for s in settings]
-            lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    head = ("| sequence, detections | boxes with true IDs | previous engine | default "
+            "| default − previous | default HOTA |")
+    rule = "|---|---|---|---|---|---|"
+    if res.peers:
+        head += " best peer (peerbench, this run) | default − peer |"
+        rule += "---|---|"
+    head += " best peer recorded earlier |"
+    rule += "---|"
+    lines += [head, rule]
+    for s in COLUMNS:
+        seq, kind = s.split("|")
+        orc = res.oracles[seq][kind]
+        pv = None if prev_default is None else prev_default.get(s)
+        cells = [LABEL[s], _pair(orc), _pair(pv), _pair(new[s]), _diff(new[s], pv),
+                 _fmt(new[s]["HOTA"])]
+        if res.peers:
+            best = _best_peer(res.peers[s])
+            cells += [f"{_pair(best)} ({best['name']})", _diff(new[s], best)]
+        name, m, i = RECORDED_PEERS[(seq, kind)]
+        cells.append(f"{name} {m:.3f} / {i:.3f}")
+        lines.append("| " + " | ".join(cells) + " |")
     lines += [
         "",
-        "### Every combination (MOTA / IDF1 / HOTA), sorted by mean MOTA + IDF1",
-        "",
-        "| predictor / distance / assignment | " + " | ".join(label[s] for s in settings)
-        + " | ms/frame |",
-        "|---|" + "---|" * (len(settings) + 1),
+        "*Boxes with true IDs*: the input boxes scored with their true identities and no "
+        "tracking (for test.txt, its own IDs): what the boxes alone give. "
+        + ("*Best peer*: the best of peerbench's box trackers per metric (it may be two "
+           "peers), each with its settings of `../shared/peerbench/README.md`, scored by "
+           "peerbench (the default's results files scored by peerbench too give "
+           + _peer_check(res) + "). " if res.peers else "")
+        + "*Recorded earlier*: the best peers of an earlier measurement on this machine, "
+        "configuration not recorded.",
     ]
-    for c in ranked:
-        cells = [
-            f"{_fmt(results[c.name][s]['MOTA'])} / {_fmt(results[c.name][s]['IDF1'])} / "
-            f"{_fmt(results[c.name][s]['HOTA'])}"
-            for s in settings
-        ]
-        ms = np.median([results[c.name][s]["ms_per_frame"] for s in settings])
-        mark = " **(default)**" if c == default else ""
-        lines.append(f"| {c.name}{mark} | " + " | ".join(cells) + f" | {ms:.2f} |")
+    lines += _findings(res, dflt)
+    lines += _variants_table(res, prev)
+    lines += _gap_text(res.gaps, res.variants)
+    lines += _grid_table(res, combos, dflt, prev)
     return "\n".join(lines) + "\n"
 
 
-def _summary(
-    d: dict[str, dict[str, Any]], settings: list[str], label: dict[str, str]
-) -> list[str]:
-    """One paragraph: where the default beats the best peer and where it stays below."""
-    above, below = [], []
-    for s in settings:
-        _, p_mota, p_idf1 = PEERS[tuple(s.split("|"))]  # type: ignore[index]
-        dm, di = d[s]["MOTA"] - p_mota, d[s]["IDF1"] - p_idf1
-        text = f"{label[s]} {dm:+.3f} / {di:+.3f}"
-        (above if dm >= 0 and di >= 0 else below).append(text)
-    out = ["", "**Against the best peer** (default − peer, MOTA / IDF1): "]
-    if above:
-        out[-1] += "at or above it on " + "; ".join(above) + ". "
-    if below:
-        out[-1] += "**Below it** on " + "; ".join(below) + " (see *test.txt: where the " \
-            "peers' margin comes from* below)."
+def _best_peer(peers: dict[str, dict[str, float]]) -> dict[str, Any]:
+    """The best peer per metric (the default's own results file, ``mvtrack``, left out)."""
+    names = [n for n in peers if n != "mvtrack"]
+    bm = max(names, key=lambda n: peers[n]["MOTA"])
+    bi = max(names, key=lambda n: peers[n]["IDF1"])
+    return {"MOTA": peers[bm]["MOTA"], "IDF1": peers[bi]["IDF1"],
+            "name": bm if bm == bi else f"{bm}, {bi}"}
+
+
+def _peer_check(res: Results) -> str:
+    if not res.peers:
+        return "–"
+    same = all(
+        abs(res.peers[s]["mvtrack"][m] - res.grid[default_combo().name][s][m]) < 5e-4
+        for s in COLUMNS for m in ("MOTA", "IDF1") if "mvtrack" in res.peers[s]
+    )
+    return "the same MOTA and IDF1 as `mvtrack.eval`" if same else \
+        "figures that differ from `mvtrack.eval`'s: see the JSON"
+
+
+def _findings(res: Results, dflt: Combo) -> list[str]:
+    """Where the default gained and lost against the previous engine and the peers, which
+    single changes recover a loss, and whom the default misses on the noisy ground truth."""
+    prev = res.previous or {}
+    pd = prev.get("results", {}).get(prev.get("default", ""))
+    new = res.grid[dflt.name]
+    out = ["", "**In short.**"]
+    worse: list[str] = []
+    if pd is not None:
+        worse = [s for s in COLUMNS if new[s]["MOTA"] < pd[s]["MOTA"] - 5e-4
+                 or new[s]["IDF1"] < pd[s]["IDF1"] - 5e-4]
+        better = [s for s in COLUMNS if s not in worse]
+        if worse:
+            out[-1] += " Against the previous engine the default is **worse** on " + "; ".join(
+                f"{LABEL[s]} ({_diff(new[s], pd[s])})" for s in worse) + "."
+        if better:
+            out[-1] += " At or above it on " + "; ".join(
+                f"{LABEL[s]} ({_diff(new[s], pd[s])})" for s in better) + "."
+    if res.peers:
+        below = [s for s in COLUMNS
+                 if new[s]["MOTA"] < _best_peer(res.peers[s])["MOTA"]
+                 or new[s]["IDF1"] < _best_peer(res.peers[s])["IDF1"]]
+        if below:
+            out[-1] += " Below peerbench's best peer on " + "; ".join(
+                f"{LABEL[s]} ({_diff(new[s], _best_peer(res.peers[s]))})" for s in below) + "."
+        else:
+            out[-1] += " At or above peerbench's best peer on every column."
+    cv = res.variants.get("predictor kalman-cv (the IMM's steady filter alone)")
+    if cv is not None:
+        out[-1] += (" The IMM against its steady filter alone (default − kalman-cv): "
+                    + "; ".join(f"{LABEL[s]} {_diff(new[s], cv[s])}" for s in COLUMNS) + ".")
+    for s in worse:
+        fixes = [name for name, r in res.variants.items()
+                 if r[s]["MOTA"] is not None and r[s]["MOTA"] >= pd[s]["MOTA"] - 5e-4
+                 and r[s]["IDF1"] >= pd[s]["IDF1"] - 5e-4]
+        out += ["", f"*{LABEL[s]}*: the single changes of the variants table that reach the "
+                "previous engine's figure: " + ("; ".join(
+                    f"{f} ({_pair(res.variants[f][s])}, elsewhere "
+                    + ", ".join(f"{LABEL[o]} {_diff(res.variants[f][o], new[o])}"
+                                for o in COLUMNS if o != s) + ")" for f in fixes)
+                    if fixes else "none") + "."]
+    for key, runs in res.missed.items():
+        people: dict[int, list[dict[str, Any]]] = {}
+        for run in runs:
+            for m in run:
+                people.setdefault(m["id"], []).append(m)
+        if not people:
+            continue
+        out += ["", f"*Whom the default misses on {LABEL[key]}* (ground-truth people missed "
+                f"in 5 frames or more of a run, of {len(runs)} runs; the median IoU of their box "
+                "with another person's over the missed frames): " + "; ".join(
+                    f"person {pid}, {len(ms)} run(s), frames "
+                    + ", ".join(f"{m['first']}–{m['last']} ({m['frames']})" for m in ms)
+                    + f", IoU {np.median([m['overlap'] for m in ms]):.2f}"
+                    for pid, ms in sorted(people.items())) + "."]
+        b = default_config().birth_iou
+        if b is not None and any(np.median([m["overlap"] for m in ms]) >= b
+                                 for ms in people.values()):
+            out[-1] += (f" `birth_iou` ({b:g}) refuses a track to a detection left over whose "
+                        "box overlaps a live track's by that IoU or more: a person who appears "
+                        "overlapping a tracked one is missed until they separate (the "
+                        "`birth_iou` rows of the variants table).")
     return out
 
 
-def _chosen_text() -> list[str]:
-    """How the default was chosen (static text; the figures it relies on are in the tables)."""
-    return [
+def _variants_table(res: Results, prev: dict[str, Any]) -> list[str]:
+    pd = prev.get("results", {}).get(prev.get("default", ""))
+    lines = [
         "",
-        "### How the default was chosen",
+        "### The default with one change at a time (MOTA / IDF1)",
         "",
-        "The previous default (σ_z = 2 px, a 10 px Euclidean gate, a 20 px second stage, every "
-        "coasting row output) was tuned on the crowd scene of docs/bench/tracker.md: 40 × 30 px "
-        "boxes with 2 px noise. On TUD the boxes are 50–200 px and the noisy-gt detections carry "
-        "noise of 5 % of the box (σ ≈ 4 px along x, ≈ 9 px along y for a 73 × 185 px person), so "
-        "a 10 px gate loses the targets (see the *previous default* row below). The new default "
-        "keeps every pixel value of the old one for boxes up to `size_ref` = 50 px wide and high "
-        "and stretches them per axis for larger boxes: the gates become ellipses with semi-axes "
-        "scaled by f_x = w / 50 and f_y = h / 50, the measurement variance is multiplied by "
-        "max(f_x, f_y)² (one isotropic variance per track, covering the noisier axis) and the "
-        "recovery margin by max(f_x, f_y) (`TrackerConfig.size_ref`) — a detector's localisation "
-        "error grows with the box, as in DeepSORT, whose noise is proportional to the box height."
-        " Motion parameters (σ_a, velocity prior, recovery speed) are not scaled. Second, the "
-        "Euclidean assignment cost of a gated pair gets a box-size term, `size_weight` = 0.5 "
-        "times the squared difference of the boxes' widths and heights (in the same stretched "
-        "units, capped at the gate; the gate itself stays on the position): like the overlap in "
-        "IoU association it separates people side by side at different depths. Third, "
-        "`coast_output` = 0.08 s keeps a lost track alive for `max_coast` (0.3 s) but outputs its"
-        " predicted rows only for the first two frames: a short gap is usually a missed detection"
-        " of a target still there, a longer one more often a target that has left. On Campus "
-        "test.txt the scaling costs accuracy (sensitivity table, *no box-size scaling*); it is"
-        " kept for the noisy-gt columns, where the previous default fails. Fourth, `backfill`: "
-        "an offline run (`track_detections`) writes a confirmed track from its first detection,"
-        " as a multi-measurement initiator that hands over its whole tentative track does; the "
-        "online tracker (crowd benchmark, video pipeline, `mvtrack demo`) cannot rewrite past "
-        "frames and is unchanged by it.",
+        "Each row changes one thing of the default (its value in brackets): the settings of "
+        "`docs/settings.md` moved down and up, the IMM against its steady filter alone, the "
+        "offline rows, and the papers' presets (their own settings throughout, "
+        "`docs/settings.md`). The defaults were chosen on the frame-rate sweep "
+        "(`docs/bench/defaults.md`), not on these sequences.",
         "",
-        "Two later defaults. `size_gate`: a track and a detection whose widths or heights "
-        "differ by more than a factor ρ are never paired — a box much larger or smaller is "
-        "another object (see *Identities* below). It was introduced here with ρ = 2; ρ = 1.5 "
-        "is the MOT15 leave-one-sequence-out choice among the gates that keep this benchmark's "
-        "figures (1.4 costs Campus noisy gt 0.002 MOTA and 0.001 IDF1, 0.011 and 0.006 "
-        "before the width was gated at ρ²; "
-        "`docs/bench/mot15-defaults.md`), and *size gate 2* in the sensitivity table is the "
-        "earlier value. It is off in the video pipeline: the "
-        "disturbance map's blobs merge and split, and on `mvtrack demo` the gate cost IDF1 "
-        "0.876 → 0.860; on the crowd scene (boxes ±10 %) it changes no output. And "
-        "`interpolate`: an offline run writes every row of a gap that a track bridged (lost "
-        "for at most `max_coast`, then associated again), the box interpolated linearly "
-        "between the measured rows on either side — the linear interpolation commonly applied "
-        "to offline MOTChallenge results; it has no parameter of its own (see *no "
-        "interpolation* in the sensitivity table).",
-
-        "",
-        "The principle (noise and gates proportional to the box) comes from the detector model, "
-        "not from TUD. **Six choices were then made by looking at these TUD sequences** (noisy "
-        "gt seeds 0–2 and test.txt) together with the crowd scene, and nothing else was tuned: "
-        "per-axis factors rather than one factor √(w h) / size_ref (in the development sweep, "
-        "with max_coast 0.1 s instead of coast_output, Campus noisy gt rose from 0.865 / 0.878 to"
-        " 0.910 / 0.929); `size_ref` 50 px rather than 40 px (better Campus test.txt MOTA and "
-        "Stadtmitte noisy-gt IDF1, within 0.001 elsewhere in the sensitivity table, and the crowd"
-        " scene's boxes, at most ~47 px, stay unscaled); the variance factor max(f_x, f_y)² "
-        "rather than f_x f_y (Stadtmitte noisy-gt IDF1 0.968 → 0.990; σ_z itself stays 2 px, the "
-        "crowd scene's noise, which is better than 3 px at N = 10 and 100 on every crowd seed we "
-        "ran; at N = 1 000 3 px gives IDF1 0.963 against 0.955); `size_weight` 0.5 (0.5 and 1 "
-        "gave the same TUD figures; it must stay below 1, see `TrackerConfig`; on the crowd scene"
-        " it changed nothing at N = 10 and 100 and cut the ID switches at N = 1 000 from 262 to "
-        "223); `coast_output` two frames (three frames cost Campus noisy gt 0.016 MOTA in the"
-        " sweep); and the size gate's factor 2 rather than 2.5 or 3 (the Campus event it "
-        "prevents pairs boxes 2.5 times apart; *size gate 2.5* in the sensitivity table), since"
-        " lowered to 1.5 on the MOT15 sequences. The "
-        "crowd benchmark (docs/bench/tracker.md) and the video experiments (`mvtrack"
-        " demo`, X4, X5) were re-checked with the same default. How the peers were configured is "
-        "not recorded here; part of our margin on the noisy-gt columns is tuning on these "
-        "sequences.",
+        "| variant | " + " | ".join(LABEL[s] for s in COLUMNS) + " |",
+        "|---|" + "---|" * len(COLUMNS),
     ]
+    if pd is not None:
+        lines.append(f"| previous engine ({prev.get('code', '')}) | "
+                     + " | ".join(_pair(pd.get(s)) for s in COLUMNS) + " |")
+    for name, r in res.variants.items():
+        lines.append(f"| {name} | " + " | ".join(_pair(r[s]) for s in COLUMNS) + " |")
+    return lines
 
 
-def _gap_text(
-    gaps: dict[str, dict[str, Any]], sensitivity: dict[str, dict[str, dict[str, Any]]] | None
-) -> list[str]:
-    """Why Stone Soup beats the test.txt boxes' own MOTA, as far as measured here."""
+def _gap_text(gaps: dict[str, dict[str, Any]],
+              var: dict[str, dict[str, dict[str, Any]]]) -> list[str]:
+    """What test.txt leaves to a tracker."""
     parts = []
     for seq, g in gaps.items():
         parts.append(
@@ -505,99 +651,61 @@ def _gap_text(
             f"(gaps of {', '.join(str(x) for x in g['gaps'])} frames) and {g['outer']} before "
             "its first or after its last detection"
         )
-    sens = sensitivity or {}
+    return [
+        "",
+        "### What test.txt leaves to a tracker",
+        "",
+        "; ".join(parts) + ". Coasting and interpolation bridge the short gaps; the long ones "
+        "only a track kept that long could (`max_misses` 20 instead of 10: "
+        + ", ".join(f"{LABEL[s]} {_pair(var.get('max_misses 20 (10)', {}).get(s))}"
+                    for s in COLUMNS if s.endswith("|test"))
+        + "). test.txt's own tracks also drift from one person to the next, and a tracker that "
+        "follows its boxes inherits the switch.",
+    ]
 
-    def cell(row: str, key: str) -> str:
-        r = sens.get(row, {}).get(key)
-        return "–" if r is None else f"{_fmt(r['MOTA'])} / {_fmt(r['IDF1'])}"
 
-    coast = "coast 1 s, every coasting row output (filling test.txt's long gaps)"
+def _grid_table(res: Results, combos: list[Combo], dflt: Combo,
+                prev: dict[str, Any]) -> list[str]:
+    old = prev.get("results", {})
+
+    def mean_score(c: Combo) -> float:
+        return float(np.mean([_score(res.grid[c.name][s]) for s in COLUMNS]))
+
+    ranked = sorted(combos, key=mean_score, reverse=True)
     lines = [
         "",
-        "### test.txt: where the peers' margin comes from",
+        "### Every predictor / distance / assignment rule (MOTA / IDF1 / HOTA), sorted by "
+        "mean MOTA + IDF1",
         "",
-        "Stone Soup's MOTA on test.txt (0.599 / 0.587) is above what the boxes give with "
-        "their own IDs (first table), so it outputs correct boxes where test.txt has none. "
-        + "; ".join(parts) + ". Keeping tracks 1 s and writing every coasting row does not "
-        f"fill the long gaps (Campus / Stadtmitte {cell(coast, 'TUD-Campus|test')} and "
-        f"{cell(coast, 'TUD-Stadtmitte|test')}, sensitivity table): most predictions through "
-        "16–51 frames miss the person (IoU < 0.5).",
+        "The rest of the configuration is the default; a distance other than `mahalanobis` "
+        "has its own default gate (`docs/association.md`); `kalman-ca`, `kalman-coupled`, "
+        "`rls` and `structured` keep their own noise in pixels (only `kalman-imm` and "
+        "`kalman-cv` scale theirs with the box). *was*: the same combination in the previous "
+        "engine (MOTA / IDF1; its other settings were that engine's defaults; `kalman-imm` "
+        "did not exist).",
         "",
-        "**A plain Stone Soup tracker, rebuilt here.** To see *what* the peer does, we built "
-        "a plain Stone Soup 1.9.1 GNN tracker on the same boxes, outside this repository, and "
-        "scored it with the same `evaluate`: constant-velocity model on the box centre "
-        "(noise coefficient q = 100 px²/s³), Kalman predictor and updater with R = 100 px² on "
-        "the centre, Mahalanobis distance hypothesiser (missed distance 3), GNN with 2-D "
-        "assignment, multi-measurement initiator (2 points, velocity prior 50 px/s), deletion "
-        "5 steps after the last update; every state of every track written — the initiating "
-        "detection, the updates with the *measured* box, the predictions through misses and the"
-        " 5 before deletion with the last measured size. It gives Campus 0.571 / 0.634 (FP 28, "
-        "FN 121, IDSW 5) and Stadtmitte 0.561 / 0.656 (FP 65, FN 437, IDSW 6); in a sweep of "
-        "about 60 configurations (q 1–1000 px²/s³, R 4–1600 px², deletion 2–10 steps, box "
-        "size in the state or measured, predictions written or not) none reached the recorded "
-        "0.599 / 0.587 (best Campus MOTA 0.571, best Stadtmitte 0.575), so the recorded run had "
-        "a configuration we did not find; the mechanisms below are those of the rebuilt one.",
-        "",
-        "**Frame by frame against our default without backfill** (measured before the size "
-        "gate and interpolation became defaults; ground-truth boxes matched "
-        "at IoU 0.5). Campus: the rebuilt tracker matches 33 ground-truth boxes that we miss, "
-        "we match 5 that it misses. Of its 33: (a) 19 are *predicted* rows, most of them "
-        "among the 5 "
-        "written before a track is deleted — 25 of its 40 such rows hit the person, because "
-        "test.txt ends tracks of people who keep walking on a straight line; our "
-        "`coast_output` writes 2 and writing 5 costs us (coast_output 0.2 s: Campus 0.513 / "
-        "0.534 before backfill, 16 of our 30 such rows hit); (b) 9 are among the first two "
-        "rows of a track, which an initiator that hands over its tentative track writes: "
-        "`backfill`, now our default, gains 4 of them (the other 5 we did not trace); (c) 5 "
-        "are detected boxes where our row (filtered centre, "
-        "smoothed size) has IoU < 0.5 and the measured box has it: writing the measured box "
-        "gave Campus +0.028 MOTA but Stadtmitte −0.004 and Campus noisy gt −0.006 / −0.003, so "
-        "it was not adopted. Stadtmitte: 24 against 9 (7 first rows of a track, 7 detected "
-        "boxes, 10 predictions); with backfill 17 against 9.",
-        "",
-        "**Identities.** Without the size gate (Campus "
-        f"{cell('no size gate (size_gate = None)', 'TUD-Campus|test')}) our tracks of large "
-        "boxes take the detection of *another* person of half their size — the second gate "
-        "(20 px stretched with the box, up to 50 × 114 px around a 126 × 285 px person) and the "
-        "recovery stage reach it, and the size term of the cost only ranks pairs; e.g. Campus "
-        "frames 49–52, a 126 × 285 px track takes the 50 × 115 px box of a farther person and "
-        "writes 4 false positives before it is lost. The peer's gate (σ 10 px, not stretched) "
-        "does not reach it; the size gate (factor 2, and the default 1.5) refuses it. What "
-        "remains on "
-        "Campus is one group of people walking side by side (frames 33–39): a track whose own "
-        "detection is missed takes the neighbour's, through the second gate or the recovery "
-        "stage (10 px + the 6 px margin stretched with the box). Each change that prevents "
-        "that one "
-        "event lifts Campus to the peer's level or above — no recovery stage "
-        f"{cell('no recovery stage (recover_speed = None)', 'TUD-Campus|test')}, no recovery "
-        f"margin {cell('no recovery margin (recover_margin = 0)', 'TUD-Campus|test')}, a 15 px "
-        f"second gate {cell('second_gate = 15 px', 'TUD-Campus|test')} — but each is a knife "
-        "edge (a 1 px margin gives "
-        f"{cell('recovery margin 1 px (recover_margin = 1)', 'TUD-Campus|test')}; 16 px for the"
-        " second gate loses the gain) or costs elsewhere (without the recovery stage the crowd "
-        "scene's IDF1 falls from 0.992 to 0.859 at N = 10, docs/bench/tracker.md), so none was "
-        "adopted. Keeping tracks 0.5 s "
-        f"({cell('tracks kept 0.5 s (max_coast = 0.5)', 'TUD-Campus|test')}) bridges longer "
-        "Campus gaps, which interpolation fills (without it 0.565 / 0.578), but 0.8 s already "
-        "costs Campus noisy gt "
-        f"({cell('tracks kept 0.8 s (max_coast = 0.8)', 'TUD-Campus|noisy')}).",
-        "",
-        "**Where the rest of the margin lies.** With the default, Campus test.txt is 0.02 MOTA "
-        "and 0.04 IDF1 below the recorded peer, and above the rebuilt one on MOTA (0.571); the "
-        "difference is the group event above and the predicted rows before deletion (a). On "
-        "Stadtmitte the boxes themselves set the ceiling: the default is at the MOTA of "
-        "test.txt with its own IDs, and 150 random configurations of σ_z, σ_a, velocity prior, "
-        "gates, confirmation, size smoothing, size weight and max_coast (with the size gate, "
-        "without the recovery stage) all gave MOTA ≤ 0.565; test.txt's own tracks drift from "
-        "one person to the next (e.g. frames 44–53, a box slides from ground-truth person 5 "
-        "onto person 4), and a tracker that follows the boxes inherits the switch. The "
-        "recorded 0.587 is from a configuration we could not reproduce. Confirmation and "
-        "box-size smoothing are not where the difference lies: confirm_hits 1 or 3, a "
-        "tentative track surviving misses (tentative_max_coast 0.2 s), size_smoothing 1 and "
-        "smoother filters (σ_a 20–50 px/s², σ_z 5 px) each moved the test.txt MOTA by at most "
-        "0.025 and cost elsewhere in our sweeps.",
+        "| predictor / distance / assignment | " + " | ".join(LABEL[s] for s in COLUMNS)
+        + " | ms/frame |",
+        "|---|" + "---|" * (len(COLUMNS) + 1),
     ]
+    for c in ranked:
+        cells = []
+        for s in COLUMNS:
+            r = res.grid[c.name][s]
+            cell = f"{_fmt(r['MOTA'])} / {_fmt(r['IDF1'])} / {_fmt(r['HOTA'])}"
+            was = old.get(c.name, {}).get(s)
+            if was is not None:
+                cell += f" (was {_pair(was)})"
+            cells.append(cell)
+        ms = np.nanmedian([res.grid[c.name][s]["ms_per_frame"] for s in COLUMNS])
+        mark = " **(default)**" if c == dflt else ""
+        lines.append(f"| {c.name}{mark} | " + " | ".join(cells) + f" | {ms:.2f} |")
     return lines
+
+
+def _line(label: str, key: str, r: dict[str, Any]) -> str:
+    return (f"{label:58s} {key:22s} MOTA {_fmt(r['MOTA'])} IDF1 {_fmt(r['IDF1'])} "
+            f"HOTA {_fmt(r['HOTA'])} {r['ms_per_frame']:.2f} ms/frame")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -605,75 +713,79 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="seeds of the noisy detections")
     parser.add_argument("--out", type=Path, default=Path("docs/bench/tud.md"))
     parser.add_argument("--json", type=Path, default=None, help="also write raw figures")
+    parser.add_argument("--previous", type=Path, default=None,
+                        help="JSON of an earlier version's run, shown beside today's")
+    parser.add_argument("--peers-python", default=None,
+                        help="the peers' interpreter (peerbench): run them on the same files")
     parser.add_argument("--quick", action="store_true", help="only the default combination")
-    parser.add_argument(
-        "--no-coasting", action="store_true", help="leave coasting (missed) rows out of results"
-    )
     args = parser.parse_args(argv)
     if args.seeds < 1:
         parser.error("--seeds must be >= 1")
+    previous = None
+    if args.previous is not None:
+        try:
+            previous = json.loads(args.previous.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            parser.error(f"--previous {args.previous}: {exc}")
+    if args.peers_python is not None and not Path(args.peers_python).exists():
+        parser.error(f"--peers-python {args.peers_python}: no such interpreter")
 
-    default = default_combo()
-    combos = [default] if args.quick else grid()
-    if default not in combos:
-        combos.insert(0, default)
+    dflt = default_combo()
+    combos = [dflt] if args.quick else grid()
+    if dflt not in combos:
+        combos.insert(0, dflt)
     gts = {s: read_tracks(data_dir() / s / "gt.txt", kind="gt") for s in SEQUENCES}
-    inputs: dict[str, list[list[Detections]]] = {}
-    for s in SEQUENCES:
-        inputs[f"{s}|test"] = [test_detections(s, gts[s].num_frames)]
-        inputs[f"{s}|noisy"] = [
-            noisy_detections(gts[s], np.random.default_rng(seed)) for seed in range(args.seeds)
-        ]
+    data = inputs(gts, args.seeds)
 
-    results: dict[str, dict[str, dict[str, Any]]] = {}
     t0 = time.perf_counter()
+    results: dict[str, dict[str, dict[str, Any]]] = {}
     for i, c in enumerate(combos, 1):
+        config = combo_config(c)
         results[c.name] = {}
-        for key, variants in inputs.items():
-            seq = key.split("|")[0]
-            try:
-                runs = [
-                    run_one(c, frames, gts[seq], not args.no_coasting) for frames in variants
-                ]
-            except KeyboardInterrupt:
-                raise
-            except Exception as exc:  # a combination that cannot run is reported, not fatal
-                print(f"[{i}/{len(combos)}] {c.name} {key}: failed: {exc}", file=sys.stderr)
-                runs = [{"MOTA": None, "IDF1": None, "HOTA": None, "IDSW": None, "FP": None,
-                         "FN": None, "ms_per_frame": float("nan")}]
-            results[c.name][key] = _mean(runs)
-            r = results[c.name][key]
-            print(
-                f"[{i}/{len(combos)}] {c.name:40s} {key:22s} MOTA {_fmt(r['MOTA'])} "
-                f"IDF1 {_fmt(r['IDF1'])} HOTA {_fmt(r['HOTA'])} {r['ms_per_frame']:.2f} ms/frame",
-                flush=True,
-            )
-    sensitivity: dict[str, dict[str, dict[str, Any]]] = {}
-    if not args.quick:
-        for name, changes, coast in SENSITIVITY:
-            sensitivity[name] = {
-                key: _mean([run_one(default, f, gts[key.split("|")[0]], coast, changes)
-                            for f in variants])
-                for key, variants in inputs.items()
-            }
-            print(f"sensitivity {name}: " + "  ".join(
-                f"{k} {_fmt(v['MOTA'])}/{_fmt(v['IDF1'])}" for k, v in sensitivity[name].items()
-            ), flush=True)
-    elapsed = time.perf_counter() - t0
+        for key, runs in data.items():
+            r = run_column(config, runs, gts[key.split("|")[0]], f"{c.name} {key}")
+            results[c.name][key] = r
+            print(f"[{i}/{len(combos)}] " + _line(c.name, key, r), flush=True)
+    var: dict[str, dict[str, dict[str, Any]]] = {}
+    for v in [] if args.quick else variants():
+        config = v.config()
+        var[v.label] = {
+            key: run_column(config, runs, gts[key.split("|")[0]], f"{v.label} {key}",
+                            coasting=v.coasting, offline=v.offline)
+            for key, runs in data.items()
+        }
+        print("variant " + v.label + ": " + "  ".join(
+            f"{k} {_pair(r)}" for k, r in var[v.label].items()), flush=True)
+    missed = {  # who the default misses on the noisy ground truth, run by run
+        key: [missed_people(track_detections(frames, combo_config(dflt)).to_mot(),
+                            gts[key.split("|")[0]]) for frames in runs]
+        for key, runs in data.items() if key.endswith("|noisy")
+    }
+    peers = None
+    if args.peers_python is not None:
+        with tempfile.TemporaryDirectory() as tmp:
+            work = Path(tmp)
+            rows: dict[str, list[Path]] = {}
+            for key, runs in data.items():  # the default's results files, for peerbench
+                rows[key] = []
+                for j, frames in enumerate(runs):
+                    path = work / f"{key.replace('|', '-')}-{j}.mvtrack.txt"
+                    run_one(combo_config(dflt), frames, gts[key.split("|")[0]], keep=path)
+                    rows[key].append(path)
+            peers = run_peers(args.peers_python, gts, data, rows, work)
+    res = Results(
+        seeds=args.seeds, grid=results, variants=var,
+        oracles={s: oracle(s, gts[s], args.seeds) for s in SEQUENCES},
+        gaps={s: test_gaps(s) for s in SEQUENCES}, peers=peers, previous=previous,
+        previous_path=str(args.previous), elapsed=time.perf_counter() - t0, missed=missed,
+    )
     if args.json is not None:
-        write_json(args.json, {"seeds": args.seeds, "default": default.name, "results": results,
-                               "sensitivity": sensitivity})
-    for c in combos:  # failed runs rank last
-        for r in results[c.name].values():
-            for k in ("MOTA", "IDF1"):
-                r[k] = -np.inf if r[k] is None else r[k]
+        write_json(args.json, {"seeds": args.seeds, "code": code_version(),
+                               "default": dflt.name, "results": results, "variants": var,
+                               "peers": peers, "missed": missed})
     given = argv if argv is not None else sys.argv[1:]
     command = "python benchmarks/bench_tud.py " + " ".join(given)
-    write_text(args.out, report(
-        results, combos, default, command.strip(), args.seeds, elapsed, not args.no_coasting,
-        {s: oracle(s, gts[s], args.seeds) for s in SEQUENCES}, sensitivity,
-        {s: test_gaps(s) for s in SEQUENCES},
-    ))
+    write_text(args.out, report(res, combos, command.strip()))
     print(f"wrote {args.out}")
     return 0
 

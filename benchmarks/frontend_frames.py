@@ -1,11 +1,12 @@
 """Annotated frames of the default real-video front end, and its track statistics.
 
 Runs the scene front end offline (background from the clip's median, size prior from a first
-pass; :func:`mvtrack.detection.feedback.two_pass`) with the default tracker as the video pipeline
-sets it (:func:`bench_kitti.tracker_config`) on vtest.avi and KITTI-17, writes the chosen
-frames with each box, its track ID and its blob flag (plain / merged / split) and the learnt
-size prior drawn as a faint ruler (the expected height of a person standing at each of a few
-rows), and prints the number of tracks and their median length.
+pass; :func:`mvtrack.detection.feedback.two_pass`) with the default tracker as the video
+pipeline builds it (:func:`bench_kitti.online_tracker`: the default preset and the image's
+size) on vtest.avi and KITTI-17, writes the chosen frames with each box, its track ID and its
+blob flag (plain / merged / split) and the learnt size prior drawn as a faint ruler (the
+expected height of a person standing at each of a few rows), and prints the number of tracks
+and their median length.
 
 Usage::
 
@@ -24,10 +25,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_kitti import SEQ, VTEST, load_frames, tracker_config
+from bench_kitti import SEQ, VTEST, load_frames, online_tracker, tracker_config
 from mvtrack.detection.feedback import detect_with_tracker
 from mvtrack.detection.scene_frontend import SceneFrontEnd
-from mvtrack.tracking import Tracker, track_detections
+from mvtrack.tracking import track_detections
 
 VTEST_FRAMES = (157, 185, 212, 300)
 KITTI_FRAMES = (5, 40, 100, 130)
@@ -84,7 +85,7 @@ def run(name: str, frames: list[np.ndarray], fps: float, keep: tuple[int, ...], 
     size = (frames[0].shape[1], frames[0].shape[0])
     first = SceneFrontEnd()
     first.bootstrap(frames)
-    detect_with_tracker(frames, first, Tracker(tracker_config(size, fps)))
+    detect_with_tracker(frames, first, online_tracker(size, fps))
     fe = SceneFrontEnd(prior=first.prior)
     fe.bootstrap(frames)
     flags: dict[int, np.ndarray] = {}
@@ -93,8 +94,8 @@ def run(name: str, frames: list[np.ndarray], fps: float, keep: tuple[int, ...], 
         if k in keep:
             flags[k] = fe.flags.copy()
 
-    dets = detect_with_tracker(frames, fe, Tracker(tracker_config(size, fps)), on_frame=on_frame)
-    mot = track_detections(dets, tracker_config(size, fps)).to_mot()
+    dets = detect_with_tracker(frames, fe, online_tracker(size, fps), on_frame=on_frame)
+    mot = track_detections(dets, tracker_config(fps)).to_mot()
     out.mkdir(parents=True, exist_ok=True)
     for k in keep:
         img = draw(frames[k], mot[mot[:, 0] == k + 1], flags[k], dets[k].tlwh, fe,
