@@ -178,14 +178,14 @@ def test_a_signal_in_track_detections_writes_the_frames_tracked(tmp_path, capsys
                            for k in range(40)])
     real = tracking.track_detections
 
-    def signalling(frames, config):
+    def signalling(frames, config, **options):
         def frames_sending():
             for k, d in enumerate(frames):
                 if k == 10:
                     os.kill(os.getpid(), sig)
                 yield d
 
-        return real(frames_sending(), config)
+        return real(frames_sending(), config, **options)
 
     monkeypatch.setattr(tracking, "track_detections", signalling)
     before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
