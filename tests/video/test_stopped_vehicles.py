@@ -86,6 +86,6 @@ def test_states_csv_gives_each_stopped_row_its_template_score(tmp_path) -> None:
     tracks, rows = np.unique(ids[standing], return_counts=True)
     order = np.argsort(-rows)
     assert rows.size >= 2 and rows[order[1]] >= 200 and rows[order[:2]].sum() >= 300, rows
-    assert (rows[order[2:]] <= 2).all(), dict(zip(tracks[order[2:]], rows[order[2:]]))
+    assert (rows[order[2:]] <= 2).all(), dict(zip(tracks[order[2:]], rows[order[2:]], strict=True))
     # streaming writes the scores of each flushed frame and then forgets them
     assert states("streamed", flush=1e-9)[1] == states("again")[1]
