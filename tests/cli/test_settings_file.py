@@ -87,6 +87,8 @@ def test_the_printed_defaults_follow_the_tracker_config(capsys) -> None:
     for f in dataclasses.fields(TrackerConfig):
         assert f"\n{f.name} = " in tracker or f"\n# {f.name} = " in tracker, f.name
     assert "\n# fps = " in tracker  # the source's unless given
+    # a module named in a description keeps its full name (not "the gate (gate)")
+    assert "(mvtrack.association.gate)" in tracker and "(gate)" not in tracker
 
 
 def test_config_check_and_usage(tmp_path: Path, capsys) -> None:
