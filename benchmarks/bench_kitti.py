@@ -1,8 +1,8 @@
 """KITTI-17 end to end: images → front end → the default tracker → MOTA / IDF1.
 
-Each design is a front end; all feed the same tracker, the default preset at 10 fps with the
-video pipeline's settings for a 1224×370 video (pixel gates and measurement noise scaled by
-``s = sqrt(W H / (320 · 240))``, no size gate), run offline by
+Each design is a front end; all feed the same tracker, the default preset at 10 fps as the
+video pipeline builds it (the online tracker beside a front end knows the image's size), run
+offline by
 :func:`mvtrack.tracking.track_detections` (backfill and interpolation on). Designs whose
 front end takes the tracker's predicted boxes run a first online :class:`Tracker` beside it
 (:func:`mvtrack.detection.feedback.detect_with_tracker`); the detections it produced are then
@@ -38,6 +38,7 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from mvtrack.config import RunSettings
 from mvtrack.detection import MOG2, DisturbanceMap
 from mvtrack.detection.adaptive import GaussianBackground
 from mvtrack.detection.feedback import detect_with_tracker, two_pass
@@ -46,6 +47,7 @@ from mvtrack.eval import evaluate, iou_matrix
 from mvtrack.io.mot import MotTable, read_tracks
 from mvtrack.tracking import Tracker, TrackerConfig, track_detections
 from mvtrack.types import Detections
+from mvtrack.video import build_tracker_config, resolve_settings
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 SEQ = SHARED / "data" / "real" / "KITTI-17"
@@ -58,23 +60,17 @@ TODAY = {"disturbance-map": (-1.097, 0.014), "mog2": (-0.469, 0.227)}
 
 
 def tracker_config(size: tuple[int, int], fps: float = FPS) -> TrackerConfig:
-    """The default preset with the video pipeline's size-dependent settings for ``size``.
+    """The tracker configuration the video pipeline builds for a ``size`` video at ``fps``
+    (:func:`mvtrack.video.resolve_settings`, :func:`mvtrack.video.build_tracker_config`: the
+    default preset; the tracker's settings are in box sizes, the same for any image)."""
+    settings = resolve_settings(RunSettings(detector="scene"), size, fps)
+    return build_tracker_config(settings, fps)
 
-    As the pipeline sets them today: ``measurement_std = 2 s``, the Euclidean gate ``100 s²``,
-    ``second_gate = 20 s``, ``recover_margin = 6 s``, ``size_ref = 50 s`` with
-    ``s² = max(W H / (320 · 240), 1)``, and no size gate (blobs merge and split).
-    """
-    s2 = max(size[0] * size[1] / REFERENCE, 1.0)
-    s = math.sqrt(s2)
-    return TrackerConfig(
-        fps=fps,
-        size_gate=None,
-        measurement_std=round(2.0 * s, 3),
-        gate=round(100.0 * s2, 3),
-        second_gate=round(20.0 * s, 3),
-        recover_margin=round(6.0 * s, 3),
-        size_ref=round(50.0 * s, 3),
-    )
+
+def online_tracker(size: tuple[int, int], fps: float = FPS) -> Tracker:
+    """The online tracker beside a front end, as the video pipeline builds it (it ends a track
+    whose prediction leaves the ``size`` image)."""
+    return Tracker(tracker_config(size, fps), frame_size=(float(size[0]), float(size[1])))
 
 
 def load_frames(seq: Path) -> list[np.ndarray]:
@@ -125,14 +121,14 @@ def _scene(
             return SceneFrontEnd(background=bg, **fe_kw)
 
         if bootstrap == "two-pass":
-            dets, _ = two_pass(frames, make, lambda: Tracker(tracker_config(size)))
+            dets, _ = two_pass(frames, make, lambda: online_tracker(size))
             return dets
         fe = make()
         if bootstrap == "clip":
             fe.bootstrap(frames)
         elif bootstrap == "start":
             fe.bootstrap(frames[:20])
-        return detect_with_tracker(frames, fe, Tracker(tracker_config(size)))
+        return detect_with_tracker(frames, fe, online_tracker(size))
 
     return run
 

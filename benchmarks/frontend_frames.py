@@ -24,10 +24,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_kitti import SEQ, VTEST, load_frames, tracker_config
+from bench_kitti import SEQ, VTEST, load_frames, online_tracker, tracker_config
 from mvtrack.detection.feedback import detect_with_tracker
 from mvtrack.detection.scene_frontend import SceneFrontEnd
-from mvtrack.tracking import Tracker, track_detections
+from mvtrack.tracking import track_detections
 
 VTEST_FRAMES = (157, 185, 212, 300)
 KITTI_FRAMES = (5, 40, 100, 130)
@@ -84,7 +84,7 @@ def run(name: str, frames: list[np.ndarray], fps: float, keep: tuple[int, ...], 
     size = (frames[0].shape[1], frames[0].shape[0])
     first = SceneFrontEnd()
     first.bootstrap(frames)
-    detect_with_tracker(frames, first, Tracker(tracker_config(size, fps)))
+    detect_with_tracker(frames, first, online_tracker(size, fps))
     fe = SceneFrontEnd(prior=first.prior)
     fe.bootstrap(frames)
     flags: dict[int, np.ndarray] = {}
@@ -93,7 +93,7 @@ def run(name: str, frames: list[np.ndarray], fps: float, keep: tuple[int, ...], 
         if k in keep:
             flags[k] = fe.flags.copy()
 
-    dets = detect_with_tracker(frames, fe, Tracker(tracker_config(size, fps)), on_frame=on_frame)
+    dets = detect_with_tracker(frames, fe, online_tracker(size, fps), on_frame=on_frame)
     mot = track_detections(dets, tracker_config(size, fps)).to_mot()
     out.mkdir(parents=True, exist_ok=True)
     for k in keep:
