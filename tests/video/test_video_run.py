@@ -102,6 +102,63 @@ def test_ctrl_c_inside_the_tracker_is_also_clean() -> None:
     assert res.interrupted and res.n_frames == 3
 
 
+class SignallingTracker(CountingTracker):
+    """Sends ``sig`` to its own process in the middle of the step of frame 3, then goes on
+    with the step (as a compiled kernel would: Python code runs after the signal arrived)."""
+
+    def __init__(self, sig: int) -> None:
+        super().__init__()
+        self.sig = sig
+        self.finished: list[int] = []
+        self.handlers: list[object] = []
+
+    def step(self, dets: Detections, rescue=None) -> TrackFrame:
+        import os
+        import signal
+
+        if dets.frame == 3:
+            os.kill(os.getpid(), self.sig)
+            self.handlers.append(signal.getsignal(signal.SIGTERM))
+        out = super().step(dets, rescue)
+        self.finished.append(dets.frame)
+        return out
+
+
+@pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
+def test_a_signal_during_a_frame_ends_the_run_after_that_frame(name: str) -> None:
+    """Ctrl-C or the command line's SIGTERM in the middle of the tracker's step: the step
+    finishes (an exception raised inside the compiled kernels would come out of them as a
+    SystemError), the frame is kept, the run ends there, and the handler that was installed
+    is the one that decides (SIGTERM: the command line's, which says it was terminated)."""
+    import signal
+
+    from mvtrack.cli import _signals
+
+    tracker = SignallingTracker(getattr(signal, name))
+    before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+    with _signals.sigterm_as_interrupt():
+        res = run_frames(_frames(10), one_blob_detector, tracker, progress=False)
+        assert _signals.terminated() == (name == "SIGTERM")
+    assert res.interrupted and res.n_frames == 4 and len(res.tracks) == 4
+    assert tracker.finished == [0, 1, 2, 3]
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+
+
+def test_a_signal_without_a_python_handler_is_left_alone() -> None:
+    """An ignored SIGTERM stays ignored during the loop (so does the default one, which ends
+    the process): only signals with a Python handler wait for the end of the frame."""
+    import signal
+
+    tracker = SignallingTracker(signal.SIGTERM)
+    old = signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    try:
+        res = run_frames(_frames(6), one_blob_detector, tracker, progress=False)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+    assert not res.interrupted and res.n_frames == 6
+    assert tracker.handlers == [signal.SIG_IGN]
+
+
 def test_source_failing_mid_way_is_reported_not_raised() -> None:
     res = run_frames(_frames(10, fail_at=4, exc=OSError("stream dropped")), one_blob_detector,
                      CountingTracker(), progress=False)
