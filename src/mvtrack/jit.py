@@ -41,6 +41,7 @@ KERNEL_MODULES = (
     "jit.py",
     "filters/cv.py",
     "filters/imm.py",
+    "association/pairs.py",
     "association/assign.py",
     "tracking/lifecycle.py",
     "tracking/step.py",

@@ -35,10 +35,10 @@ class Choice:
     target: str = ""
 
 
-#: the front end used when none is named: the one that measures best on real video
-#: (KITTI-17 from the command line, docs/bench/frontend.md §6); the paper experiments and
-#: ``mvtrack demo`` name paper 1's disturbance map themselves
-DEFAULT_DETECTOR = "scene"
+#: the front end used when none is named: one model for any moving road user, cars and
+#: people alike (docs/bench/vehicles.md); the paper experiments and ``mvtrack demo`` name
+#: paper 1's disturbance map themselves
+DEFAULT_DETECTOR = "road-users"
 
 #: detection front ends (:func:`mvtrack.detection.make_detector`)
 DETECTORS: dict[str, Choice] = {
@@ -57,6 +57,10 @@ DETECTORS: dict[str, Choice] = {
     "hog": Choice(
         "OpenCV's HOG people detector over the whole frame (no background model)",
         "mvtrack.detection.hog:HOGDetector",
+    ),
+    "road-users": Choice(
+        "any moving road user: colour background, the scene's kinds and sizes learnt",
+        "mvtrack.detection.roadusers:RoadUserDetector",
     ),
     "scene": Choice(
         "per-pixel background, shadows, size prior, blobs split with the tracker",

@@ -10,7 +10,18 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import linear_sum_assignment
 
-from mvtrack.association.assign import assign
+from mvtrack.association.assign import (
+    HIGH,
+    LOW,
+    RULE_CODES,
+    _small_block,
+    assign,
+    associate,
+    solve,
+)
+from mvtrack.association.gate import Gate
+from mvtrack.association.pairs import quadratic_pairs
+from mvtrack.association.view import TrackView
 
 
 def _pairs(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -91,22 +102,21 @@ def _random_gated(rng: np.random.Generator, n: int, m: int, density: float) -> n
     return c
 
 
-@pytest.mark.parametrize("solver", ["dense", "sparse"])
-def test_optimal_equals_brute_force(solver: str) -> None:
+def test_optimal_equals_brute_force() -> None:
+    """Blocks of up to 6 rows and columns: by enumeration (up to 4) and by SciPy beyond."""
     rng = np.random.default_rng(11)
-    for _ in range(60):
-        n, m = rng.integers(1, 5, 2)
+    for _ in range(80):
+        n, m = rng.integers(1, 7, 2)
         c = _random_gated(rng, n, m, rng.uniform(0.3, 1.0))
         for u in (None, 7.0, 30.0):
-            a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u, solver=solver)
+            a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u)
             if u is None:  # the default: twice the largest gated cost
                 u = 2 * np.abs(c[np.isfinite(c)]).max() if np.isfinite(c).any() else 0.0
             got = a.cost.sum() + u * (n + m - 2 * len(a)) / 2
             np.testing.assert_allclose(got, _brute_force(c, u), rtol=1e-8, atol=1e-8)
 
 
-@pytest.mark.parametrize("solver", ["dense", "sparse", "auto"])
-def test_optimal_equals_dense_lsa_on_many_clusters(solver: str) -> None:
+def test_optimal_equals_dense_lsa_on_many_clusters() -> None:
     """Many clusters: same matching size and total cost as one dense LSA with u/2 dummies."""
     rng = np.random.default_rng(12)
     n = m = 200
@@ -115,7 +125,7 @@ def test_optimal_equals_dense_lsa_on_many_clusters(solver: str) -> None:
     d2 = ((pos_t[:, None] - pos_d[None]) ** 2).sum(-1)
     c = np.where(d2 <= 100.0, d2, np.inf)
     u = 100.0
-    a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u, solver=solver)
+    a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u)
     aug = np.full((n + m, m + n), np.inf)
     aug[:n, :m] = c
     aug[np.arange(n), m + np.arange(n)] = u / 2
@@ -179,112 +189,107 @@ def test_bad_input_raises() -> None:
         assign([0, 0], [0], [1.0], 1, 1)
 
 
-@pytest.mark.parametrize("rounds", [1, 12])
-def test_components_match_scipy_including_long_chains(rounds: int, monkeypatch) -> None:
-    """Label propagation, and (with one round allowed) the SciPy fallback."""
-    import sys
 
-    from scipy.sparse import coo_array
-    from scipy.sparse.csgraph import connected_components
 
-    module = sys.modules["mvtrack.association.optimal"]
-    monkeypatch.setattr(module, "_PROPAGATION_ROUNDS", rounds)
-    _components = module._components
-
+def test_small_blocks_are_solved_as_scipy_solves_them() -> None:
+    """The enumeration of small conflicts gives SciPy's total cost on padded blocks."""
     rng = np.random.default_rng(14)
-    chain_t = np.repeat(np.arange(60), 2)[1:]  # a chain t0-d0-t1-d1-...
-    chain_d = np.repeat(np.arange(60), 2)[:-1]
-    cases = [(chain_t, chain_d, 60, 60)]
-    for _ in range(20):
-        n, m = rng.integers(1, 40, 2)
-        p = rng.integers(0, 2 * (n + m))
-        cases.append((rng.integers(0, n, p), rng.integers(0, m, p), n, m))
-    for ti, dj, n, m in cases:
-        lab = _components(ti, dj, n, m)
-        g = coo_array((np.ones(ti.size), (ti, n + dj)), shape=(n + m, n + m))
-        k, ref = connected_components(g, directed=False)
-        # same partition, labelled by the smallest node of each component
-        assert np.unique(lab).size == k
-        assert np.unique(np.stack([lab, ref]), axis=1).shape[1] == k
-        assert np.all(lab <= np.arange(n + m)) and np.all(lab[lab] == lab)
+    for _ in range(300):
+        r, c = rng.integers(1, 5, 2)
+        u = 9.21
+        block = rng.uniform(0, 12, (r, c))
+        block[block > u] = u  # non-pairs cost u (left unmatched)
+        ra, ca = _small_block(block, u)
+        assert len(set(ca.tolist())) == ca.size  # exclusive
+        got = block[ra, ca].sum() + u * (r - ra.size)
+        pad = np.hstack([block, np.full((r, r), u)])  # every row may also stay unmatched
+        rr, cc = linear_sum_assignment(pad)
+        np.testing.assert_allclose(got, pad[rr, cc].sum(), rtol=1e-12, atol=1e-12)
+        assert (block[ra, ca] < u).all()
 
 
-def _augmented_optimum(c: np.ndarray, u: float) -> float:
-    """Reference: one dense LSA on the (N+M)² cost-of-non-assignment matrix."""
-    n, m = c.shape
-    aug = np.full((n + m, m + n), np.inf)
-    aug[:n, :m] = np.where(c < u, c, np.inf)
-    aug[np.arange(n), m + np.arange(n)] = u / 2
-    aug[n + np.arange(m), np.arange(m)] = u / 2
-    aug[n:, m:] = 0.0
-    r, k = linear_sum_assignment(aug)
-    return float(aug[r, k].sum())
+def _scene(rng: np.random.Generator, n: int, m: int, size: float = 400.0):
+    """Tracks with gates of various shapes and boxes, detections near some of them."""
+    cx = rng.uniform(0, size, (n, 2))
+    a, c = rng.uniform(4, 200, n), rng.uniform(4, 200, n)
+    b = rng.uniform(-0.8, 0.8, n) * np.sqrt(a * c)
+    S = np.stack([a, b, c], axis=1)
+    twh = rng.uniform(10, 80, (n, 2))
+    near = rng.integers(0, n, m)
+    dxy = np.where(rng.random((m, 1)) < 0.7, cx[near] + rng.normal(0, 8, (m, 2)),
+                   rng.uniform(0, size, (m, 2)))
+    dwh = twh[near] * rng.uniform(0.7, 1.4, (m, 2))
+    return cx, S, twh, dxy, dwh
 
 
-@pytest.mark.parametrize("solver", ["auto", "dense", "sparse"])
-@pytest.mark.parametrize("integer_costs", [False, True])
-@pytest.mark.parametrize("dense_frame_nodes", [0, 128])
-def test_optimal_with_leaf_peeling_equals_reference_on_geometric_scenes(
-    solver: str, integer_costs: bool, dense_frame_nodes: int, monkeypatch
-) -> None:
-    """Frames above the dense-frame size: peeling + clusters + solver, ties included.
-
-    ``DENSE_FRAME_NODES = 0`` forces the per-cluster paths after the peeling.
-    """
-    import sys
-
-    monkeypatch.setattr(
-        sys.modules["mvtrack.association.optimal"], "DENSE_FRAME_NODES", dense_frame_nodes
-    )
-    rng = np.random.default_rng(15)
-    for _ in range(6):
-        n = int(rng.integers(80, 160))
-        m = int(rng.integers(80, 160))
-        pos_t = rng.uniform(0, 300, (n, 2))
-        pos_d = np.vstack(
-            [
-                pos_t[: min(n, m)] + rng.normal(0, 4, (min(n, m), 2)),
-                rng.uniform(0, 300, (m - min(n, m), 2)),
-            ]
-        )
-        d2 = ((pos_t[:, None] - pos_d[None]) ** 2).sum(-1)
-        if integer_costs:
-            d2 = np.round(d2 / 20.0)
-        c = np.where(d2 <= (15.0 if integer_costs else 300.0), d2, np.inf)
-        for u in (None, float(np.nanmax(np.where(np.isfinite(c), c, np.nan))) * 0.7):
-            a = assign(*_pairs(c), n, m, "optimal", unmatched_cost=u, solver=solver)
-            uu = 2 * np.abs(c[np.isfinite(c)]).max() * (1 + 1e-9) + 1e-12 if u is None else u
-            got = a.cost.sum() + uu * (n + m - 2 * len(a)) / 2
-            assert got == pytest.approx(_augmented_optimum(c, uu), rel=1e-9, abs=1e-9)
-            assert len(set(a.det.tolist())) == len(a) == len(set(a.track.tolist()))
+def _reference_pairs(cx, S, twh, dxy, dwh, gate, size_w):
+    """The gate's values by the Gate object's matrix (NumPy), thresholded."""
+    cov = np.zeros((len(cx), 2, 2))
+    cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 0], cov[:, 1, 1] = S[:, 0], S[:, 1], S[:, 1], S[:, 2]
+    view = TrackView(cx, cov, cov, np.zeros_like(cx), twh)
+    value = Gate.build("mahalanobis", view, gate, size_weight=size_w).matrix(dxy, dwh)
+    ti, dj = np.nonzero(value <= gate)
+    return ti, dj, value[ti, dj]
 
 
-@pytest.mark.parametrize("u", [None, 6.0, 12.0])
-def test_many_two_by_two_clusters_match_the_reference(u: float | None, monkeypatch) -> None:
-    """Block-diagonal frame of 2 × 2 conflicts (the closed-form path), some with a pair cut."""
-    import sys
+@pytest.mark.parametrize("n,m", [(5, 6), (40, 50), (300, 280)])  # dense tests, grid, grid
+@pytest.mark.parametrize("size_w", [0.0, 16.0])
+def test_quadratic_pairs_are_exactly_the_pairs_inside_the_gate(n, m, size_w) -> None:
+    rng = np.random.default_rng(n + m)
+    cx, S, twh, dxy, dwh = _scene(rng, n, m, size=60.0 * np.sqrt(n))
+    tsel, dsel = np.ones(n, bool), np.ones(m, bool)
+    ti, dj, cost = quadratic_pairs(cx, S, twh, tsel, dxy, dwh, dsel, 9.21, size_w)
+    rt, rd, rc = _reference_pairs(cx, S, twh, dxy, dwh, 9.21, size_w)
+    assert ti.size > n // 4  # the scene has pairs
+    np.testing.assert_array_equal(ti, rt)  # sorted by track, then detection
+    np.testing.assert_array_equal(dj, rd)
+    np.testing.assert_allclose(cost, rc, rtol=1e-9)
+    # a selection of tracks and detections: the same pairs restricted to it
+    tsel, dsel = rng.random(n) < 0.5, rng.random(m) < 0.5
+    ti2, dj2, _ = quadratic_pairs(cx, S, twh, tsel, dxy, dwh, dsel, 9.21, size_w)
+    keep = tsel[rt] & dsel[rd]
+    np.testing.assert_array_equal(ti2, rt[keep])
+    np.testing.assert_array_equal(dj2, rd[keep])
 
-    module = sys.modules["mvtrack.association.optimal"]
-    rng = np.random.default_rng(16)
-    k = 120
-    c = np.full((2 * k, 2 * k), np.inf)
-    for b in range(k):
-        block = rng.uniform(0, 10, (2, 2))
-        if b % 3 == 0:
-            block[rng.integers(2), rng.integers(2)] = np.inf
-        c[2 * b : 2 * b + 2, 2 * b : 2 * b + 2] = block
-    perm_t, perm_d = rng.permutation(2 * k), rng.permutation(2 * k)
-    c = c[perm_t][:, perm_d]  # clusters scattered over the rows
-    calls = {"n": 0}
-    original = module._solve_2x2
 
-    def counting(*args):  # type: ignore[no-untyped-def]
-        calls["n"] += 1
-        return original(*args)
+def test_the_compiled_kernels_equal_their_plain_functions() -> None:
+    """The one source: compiled and interpreted give the same pairs and assignment."""
+    rng = np.random.default_rng(21)
+    for n, m in ((8, 9), (120, 110)):
+        cx, S, twh, dxy, dwh = _scene(rng, n, m, size=50.0 * np.sqrt(n))
+        dclass = rng.choice(np.array([0, 1, 2], np.int8), m, p=[0.1, 0.3, 0.6])
+        for rule in RULE_CODES.values():
+            args = (cx, S, np.zeros((0, 0)), twh, dxy, dwh, dclass, 9.21, 16.0, rule)
+            np.testing.assert_array_equal(associate(*args), associate.py_func(*args))
 
-    monkeypatch.setattr(module, "_solve_2x2", counting)
-    a = assign(*_pairs(c), 2 * k, 2 * k, "optimal", unmatched_cost=u)
-    assert calls["n"] == 1
-    uu = 2 * np.abs(c[np.isfinite(c)]).max() * (1 + 1e-9) + 1e-12 if u is None else u
-    got = a.cost.sum() + uu * (4 * k - 2 * len(a)) / 2
-    assert got == pytest.approx(_augmented_optimum(c, uu), rel=1e-9)
+
+def test_high_detections_first_then_the_low_ones_for_the_tracks_left_over() -> None:
+    """Two tracks, one high box in both gates, one low box near the second: the first stage
+    gives the high box to the nearer track, the second the low box to the other; a dropped
+    box is never taken."""
+    cx = np.array([[0.0, 0.0], [10.0, 0.0]])
+    S = np.array([[25.0, 0.0, 25.0], [25.0, 0.0, 25.0]])
+    twh = np.full((2, 2), 20.0)
+    dxy = np.array([[2.0, 0.0], [9.0, 0.0], [11.0, 0.0]])
+    dwh = np.full((3, 2), 20.0)
+    no = np.zeros((0, 0))
+    opt = RULE_CODES["optimal"]
+    # the low box (row 1) sits nearer the second track than the high one does, and yet the
+    # second track takes it only in the second stage, after the first track took the high box
+    dclass = np.array([HIGH, LOW, 0], np.int8)
+    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt)
+    assert got.tolist() == [0, 1]
+    dclass = np.array([HIGH, 0, 0], np.int8)  # dropped boxes are never taken
+    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt)
+    assert got.tolist() == [0, -1]
+    # and with all three high, the optimal assignment gives each track its nearest
+    dclass = np.full(3, HIGH, np.int8)
+    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt)
+    assert got.tolist() == [0, 1]
+
+
+def test_solve_writes_only_the_matched_tracks() -> None:
+    det_index = np.full(3, -7, np.intp)
+    ti, dj, c = np.array([1]), np.array([2]), np.array([0.5])
+    solve(ti, dj, c, 3, 3, RULE_CODES["optimal"], 9.21, det_index)
+    assert det_index.tolist() == [-7, 2, -7]

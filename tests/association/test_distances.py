@@ -13,7 +13,6 @@ from mvtrack.association.distances import (
     TrackView,
     default_gate,
     distance_matrix,
-    gate_radius,
     pair_distance,
 )
 from mvtrack.types import Detections
@@ -182,27 +181,8 @@ def test_iou_in_unit_interval_and_symmetric(a: tuple, b: tuple) -> None:
     assert ab == pytest.approx(ba, abs=1e-12)
 
 
-@pytest.mark.parametrize("name", [n for n in DISTANCES if n != "coupled-literal"])
-def test_radius_bound_contains_every_gated_pair(name: str) -> None:
-    rng = np.random.default_rng(4)
-    view = _random_view(rng, 40)
-    z = view.xy[rng.integers(0, 40, 400)] + rng.normal(0, 6, (400, 2))
-    dets = Detections(0, z, rng.uniform(5, 40, (400, 2)))
-    gate = default_gate(name)
-    d = distance_matrix(name, view, dets)
-    radius = gate_radius(name, view, dets, gate)
-    dist_px = np.linalg.norm(z[None, :, :] - view.xy[:, None, :], axis=2)
-    inside = d <= gate
-    assert inside.sum() > 40  # the test exercises the bound
-    assert np.all(dist_px[inside] <= radius[np.nonzero(inside)[0]] + 1e-9)
-
-
-def test_coupled_literal_has_no_spatial_bound() -> None:
-    assert np.all(np.isinf(gate_radius("coupled-literal", x6_view(), Z)))
-
-
 def test_default_gates() -> None:
-    assert default_gate("euclidean") == 100.0  # a 10 px circle, the tracker's default
+    assert default_gate("euclidean") == 100.0  # a 10 px circle
     for name in ("uncoupled", "coupled", "coupled-literal", "mahalanobis"):
         assert default_gate(name) == 9.21
     assert default_gate("iou") == 0.7
@@ -237,26 +217,6 @@ def test_bad_input_raises_value_error() -> None:
         )
     with pytest.raises(ValueError, match="dets must be"):
         distance_matrix("euclidean", x6_view(), np.zeros((3, 3)))
-
-
-@pytest.mark.parametrize("gate", [0.2, 0.5, 0.7, 0.95])
-def test_iou_radius_bound_is_valid_and_tighter_than_box_overlap(gate: float) -> None:
-    rng = np.random.default_rng(6)
-    wh = rng.uniform(2, 40, (50, 2))
-    view = TrackView.from_arrays(rng.uniform(0, 60, (50, 2)), wh=wh)
-    near = rng.integers(0, 50, 200)  # most detections near a track, with a similar box
-    z = np.vstack([view.xy[near] + rng.normal(0, 2, (200, 2)), rng.uniform(-10, 70, (100, 2))])
-    dwh = np.vstack([wh[near] * rng.uniform(0.8, 1.2, (200, 2)), rng.uniform(2, 40, (100, 2))])
-    dets = Detections(0, z, dwh)
-    d = distance_matrix("iou", view, dets)
-    radius = gate_radius("iou", view, dets, gate)
-    dist_px = np.linalg.norm(z[None, :, :] - view.xy[:, None, :], axis=2)
-    inside = d <= gate
-    assert inside.sum() > 20
-    assert np.all(dist_px[inside] <= radius[np.nonzero(inside)[0]] + 1e-9)
-    wmax = dwh.max(axis=0)
-    overlap_bound = 0.5 * np.hypot(view.wh[:, 0] + wmax[0], view.wh[:, 1] + wmax[1])
-    assert np.all(radius < overlap_bound)
 
 
 def test_track_view_from_predictor() -> None:

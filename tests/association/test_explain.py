@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.association import TrackView, assign, candidate_pairs, distance_matrix
+from mvtrack.association import Gate, TrackView, assign, distance_matrix
 from mvtrack.association.explain import explain
 
 
@@ -42,7 +42,7 @@ def test_nearest_rule_leaves_the_shared_detection_unused() -> None:
 
 def test_explain_given_detection_and_mahalanobis_values() -> None:
     view, dets = _frame()
-    ti, dj, c = candidate_pairs(view, dets, "mahalanobis")
+    ti, dj, c = Gate.build("mahalanobis", view, 9.21).pairs(dets, np.ones_like(dets))
     a = assign(ti, dj, c, 3, 3, "greedy")
     ex = explain(view, dets, "mahalanobis", assignment=a, det=[0, 1])
     assert ex.det_assigned_track.tolist() == [0, -1]

@@ -92,7 +92,7 @@ def test_detector_option_refuses_to_drop_the_configs_detector_parameters(tmp_pat
                                                                         capsys) -> None:
     video = _write_avi(tmp_path / "v.avi")
     cfg = tmp_path / "c.toml"
-    cfg.write_text("[detector]\ntrack_split = true\n")  # no name: the default, "scene"
+    cfg.write_text("[detector]\ntrack_split = true\n")  # no name: the default front end
     out = tmp_path / "out"
     args = ["track", str(video), "--out", str(out), "--config", str(cfg), "--no-video"]
     assert main([*args, "--detector", "disturbance-map"]) == 2
@@ -118,7 +118,7 @@ def test_config_values_are_read(tmp_path) -> None:
     assert s.tracker == {"preset": "paper1", "predictor": "rls", "gate": 100.0}
     assert (s.detector, s.templates, s.video, s.trail) == ("mog2", False, False, 12)
     assert s.with_overrides(gate=None, predictor="kalman-ca").tracker["predictor"] == "kalman-ca"
-    assert RunSettings().detector == "scene"
+    assert RunSettings().detector == "road-users"
 
 
 def test_gate_option_accepts_a_radius_in_pixels() -> None:

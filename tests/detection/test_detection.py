@@ -244,7 +244,8 @@ def test_factory_rejects_unknown_names_and_parameters() -> None:
         make_detector("optical-flow")
     with pytest.raises(ValueError, match="tresh"):
         make_detector("disturbance-map", tresh=3)
-    assert set(DETECTORS) == {"disturbance-map", "frame-diff", "mog2", "knn", "hog", "scene"}
+    assert set(DETECTORS) == {"disturbance-map", "frame-diff", "mog2", "knn", "hog", "scene",
+                              "road-users"}
     dm = make_detector("disturbance-map", threshold=30, beta_min=0.05, min_area=5, close_size=7)
     assert (dm.threshold, dm.beta_min, dm.blobs.min_area, dm.blobs.close_size) == (30, 0.05, 5, 7)
 

@@ -80,3 +80,54 @@ def test_fast_cv_with_per_track_r_equals_kalman_cv_with_each_r() -> None:
             np.testing.assert_allclose(fast.velocity(a)[i], p.velocity(s)[0], atol=1e-9)
             np.testing.assert_allclose(fast.position_cov(a)[i], p.position_cov(s)[0],
                                        rtol=1e-9)
+
+
+def test_per_axis_noise_equals_filterpy_per_axis() -> None:
+    """Each axis with its own r and q (the tracker's box-size noise: x by the width, y by the
+    height) equals two 1-D filterpy Kalman filters with those values."""
+    from filterpy.common import Q_discrete_white_noise
+    from filterpy.kalman import KalmanFilter
+
+    rng = np.random.default_rng(8)
+    r, q, vv = np.array([[2.0, 30.0]]), np.array([[0.02, 0.7]]), np.array([[4.0, 49.0]])
+    fast = KalmanCVPredictor()
+    s = fast.init(np.array([[5.0, 7.0]]), r, vv)
+    refs = []
+    for ax, start in enumerate((5.0, 7.0)):
+        f = KalmanFilter(dim_x=2, dim_z=1)
+        f.F = np.array([[1.0, 1.0], [0.0, 1.0]])
+        f.H = np.array([[1.0, 0.0]])
+        f.R = np.array([[r[0, ax]]])
+        f.Q = Q_discrete_white_noise(dim=2, dt=1.0, var=q[0, ax])
+        f.x = np.array([start, 0.0])
+        f.P = np.diag([r[0, ax], vv[0, ax]])
+        refs.append(f)
+    for k in range(40):
+        s = fast.predict(s, q)
+        for f in refs:
+            f.predict()
+        z = np.array([[5.0 + 1.2 * k, 7.0 - 0.8 * k]]) + rng.normal(0, 1.5, (1, 2))
+        s = fast.update(s, z, np.array([k % 5 != 2]), r)
+        for ax, f in enumerate(refs):
+            if k % 5 != 2:
+                f.update(z[0, ax])
+            np.testing.assert_allclose(s.x[0, [ax, 2 + ax]], f.x, rtol=1e-10, atol=1e-10)
+            np.testing.assert_allclose(s.P[0, ax], [f.P[0, 0], f.P[0, 1], f.P[1, 1]],
+                                       rtol=1e-10, atol=1e-12)
+
+
+def test_the_compiled_kernels_equal_their_plain_functions() -> None:
+    from mvtrack.filters.cv import cv_predict, cv_update
+
+    rng = np.random.default_rng(9)
+    n = 30
+    s = KalmanCVPredictor().init(rng.uniform(0, 100, (n, 2)), rng.uniform(1, 9, (n, 2)),
+                                 rng.uniform(1, 30, (n, 2)))
+    q, r = rng.uniform(0.01, 2, (n, 2)), rng.uniform(1, 9, (n, 2))
+    z, mask = rng.uniform(0, 100, (n, 2)), rng.random(n) > 0.3
+    for a, b in zip(cv_predict(s.x, s.P, q, 1.0), cv_predict.py_func(s.x, s.P, q, 1.0),
+                    strict=True):
+        np.testing.assert_array_equal(a, b)
+    for a, b in zip(cv_update(s.x, s.P, z, mask, r), cv_update.py_func(s.x, s.P, z, mask, r),
+                    strict=True):
+        np.testing.assert_array_equal(a, b)

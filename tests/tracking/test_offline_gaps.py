@@ -34,31 +34,32 @@ def _bursts(rng: np.random.Generator) -> list[Detections]:
     return frames
 
 
-def _stepped_every_frame(frames: list[Detections], config: TrackerConfig) -> np.ndarray:
+def _stepped_every_frame(frames: list[Detections], config: TrackerConfig,
+                         **kw: bool) -> np.ndarray:
     """What the offline run gave before gaps were jumped: every frame stepped (a dense list
     has no gap to jump)."""
-    return track_detections(frames, config).to_mot()
+    return track_detections(frames, config, **kw).to_mot()
 
 
-@pytest.mark.parametrize("config", [
-    TrackerConfig(fps=30.0),
-    TrackerConfig(fps=30.0, backfill=False, interpolate=False, min_track_length=None),
-    TrackerConfig(fps=30.0, max_coast=2.0, coast_output=None),
+@pytest.mark.parametrize("config,kw", [
+    (TrackerConfig(fps=30.0), {}),
+    (TrackerConfig(fps=30.0), {"backfill_rows": False, "interpolate": False}),
+    (TrackerConfig(fps=30.0, max_misses=60, lost_std=None, coast_std=float("inf")), {}),
 ])
-def test_jumping_gaps_gives_the_results_of_stepping_every_frame(config, tmp_path) -> None:
+def test_jumping_gaps_gives_the_results_of_stepping_every_frame(config, kw, tmp_path) -> None:
     path = tmp_path / "det.txt"
     write_detections(path, _bursts(np.random.default_rng(3)))
     read = read_detections(path)
     frames = list(read)  # every frame, the empty ones included
-    dense = _stepped_every_frame(frames, config)
+    dense = _stepped_every_frame(frames, config, **kw)
     sparse_input = list(frames_with_detections(read))
     assert len(sparse_input) < len(frames) // 2  # the gaps are not visited
-    log = track_detections(iter(sparse_input), config)
+    log = track_detections(iter(sparse_input), config, **kw)
     assert len(dense) > 100
     np.testing.assert_array_equal(log.to_mot(), dense)
     assert len(log) == len(read) == len(frames)
     # every frame can still be indexed, with its own frame number
-    full = track_detections(frames, config)
+    full = track_detections(frames, config, **kw)
     for k in (0, 1, 59, 60, 200, 259, 2000, 5299, 5300, len(frames) - 1, -1):
         a, b = log[k], full[k]
         assert a.frame == b.frame
@@ -73,8 +74,8 @@ def test_a_detection_file_starting_late_is_logged_from_frame_zero(tmp_path) -> N
     path = tmp_path / "det.txt"
     path.write_text("".join(",".join(f"{v:g}" for v in r) + "\n" for r in rows))
     read = read_detections(path)
-    log = track_detections(frames_with_detections(read), TrackerConfig(min_track_length=None))
-    dense = track_detections(list(read), TrackerConfig(min_track_length=None))
+    log = track_detections(frames_with_detections(read), TrackerConfig())
+    dense = track_detections(list(read), TrackerConfig())
     assert len(log) == len(dense) == 7
     assert [f.frame for f in log] == list(range(7))
     np.testing.assert_array_equal(log.to_mot(), dense.to_mot())

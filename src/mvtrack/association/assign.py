@@ -3,10 +3,7 @@
 The tracker's association of one frame is :func:`associate`, a compiled kernel
 (:func:`mvtrack.jit.kernel`) over the gate of :mod:`mvtrack.association.gate`:
 
-1. **candidate pairs** inside the gate — the quadratic gate ``Δᵀ S⁻¹ Δ + w_s ‖ln(wh_d /
-   wh_t)‖² ≤ g`` (:func:`quadratic_pairs`, pairs found through a grid on the image for
-   large frames, so the work grows with the pairs, not with ``N × M``) or a given cost
-   matrix (``iou``, ``coupled-literal``: :func:`matrix_pairs`);
+1. **candidate pairs** inside the gate (:mod:`mvtrack.association.pairs`);
 2. **stages by detection score** (ByteTrack's): every track against the high-score
    detections, then the tracks left over against the low-score ones;
 3. **a rule** per stage (``ASSIGN_RULES``):
@@ -35,6 +32,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 from mvtrack import registry
+from mvtrack.association.pairs import matrix_pairs, quadratic_pairs
 from mvtrack.jit import kernel, python_call
 
 IntArray = NDArray[np.intp]
@@ -49,158 +47,9 @@ RULE_CODES = {"nearest": 0, "greedy": 1, "optimal": 2}
 _NEAREST, _GREEDY, _OPTIMAL = 0, 1, 2
 #: detection classes of :func:`associate` (by calibrated score, :mod:`mvtrack.tracking.scores`)
 DROPPED, LOW, HIGH = 0, 1, 2
-#: below this many track × detection tests a frame is gated pair by pair, above through a grid
-_DENSE_TESTS = 4096
 #: conflicts of at most this many tracks and detections are solved by enumeration, larger ones
 #: by SciPy (a call back from compiled code costs more than enumerating a small block)
 _SMALL = 4
-
-
-# ------------------------------------------------------------------------------ candidate pairs
-
-
-@kernel
-def _pair_cost(i: int, j: int, cx: FloatArray, S: FloatArray, twh: FloatArray,
-               dxy: FloatArray, dwh: FloatArray, size_w: float, size_log: float) -> float:
-    """The gate's value of track ``i`` and detection ``j`` (``inf`` outside the size gate).
-
-    ``S`` (N, 3) is the gate's covariance ``[[s_xx, s_xy], [s_xy, s_yy]]`` as ``(s_xx, s_xy,
-    s_yy)``; the value is ``Δᵀ S⁻¹ Δ`` plus ``size_w`` times the squared log ratios of the
-    widths and heights. ``size_log > 0`` refuses pairs whose heights differ by more than the
-    factor ``e^size_log`` or widths by more than its square.
-    """
-    sxx, sxy, syy = S[i, 0], S[i, 1], S[i, 2]
-    det = sxx * syy - sxy * sxy
-    dx, dy = dxy[j, 0] - cx[i, 0], dxy[j, 1] - cx[i, 1]
-    d2 = (syy * dx * dx - 2.0 * sxy * dx * dy + sxx * dy * dy) / det  # Δᵀ S⁻¹ Δ
-    if size_w > 0.0 or size_log > 0.0:
-        lw = math.log(dwh[j, 0] / twh[i, 0])
-        lh = math.log(dwh[j, 1] / twh[i, 1])
-        if size_log > 0.0 and (abs(lh) > size_log or abs(lw) > 2.0 * size_log):
-            return math.inf
-        d2 += size_w * (lw * lw + lh * lh)
-    return d2
-
-
-@kernel
-def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_],
-                    dxy: FloatArray, dwh: FloatArray, dsel: NDArray[np.bool_], gate: float,
-                    size_w: float, size_log: float) -> tuple[IntArray, IntArray, FloatArray]:
-    """The pairs of selected tracks and detections inside the quadratic gate, with their
-    values (:func:`_pair_cost`), sorted by track then detection.
-
-    A track's gate reaches ``√(g s_xx)`` along x and ``√(g s_yy)`` along y. A small frame is
-    tested pair by pair; a large one bins the detections into square cells of the median
-    reach and tests each track against the cells its reach covers.
-    """
-    n, m = cx.shape[0], dxy.shape[0]
-    tr = np.flatnonzero(tsel)
-    dr = np.flatnonzero(dsel)
-    cap = 16 + 4 * (tr.size + dr.size)
-    ti = np.empty(cap, np.intp)
-    dj = np.empty(cap, np.intp)
-    cost = np.empty(cap, np.float64)
-    k = 0
-    if tr.size == 0 or dr.size == 0 or n == 0 or m == 0:
-        return ti[:0], dj[:0], cost[:0]
-    if tr.size * dr.size <= _DENSE_TESTS:
-        for i in tr:
-            rx, ry = math.sqrt(gate * S[i, 0]), math.sqrt(gate * S[i, 2])
-            for j in dr:
-                if abs(dxy[j, 0] - cx[i, 0]) > rx or abs(dxy[j, 1] - cx[i, 1]) > ry:
-                    continue
-                c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w, size_log)
-                if c <= gate:
-                    if k == cap:
-                        cap *= 2
-                        ti, dj, cost = _grow(ti, dj, cost, cap)
-                    ti[k], dj[k], cost[k] = i, j, c
-                    k += 1
-        return ti[:k], dj[:k], cost[:k]
-    # the detections binned into square cells of the median reach (CSR: the members of cell
-    # c are members[start[c]:start[c + 1]], cells numbered column by column)
-    reach = np.empty(tr.size)
-    for a in range(tr.size):
-        i = tr[a]
-        reach[a] = math.sqrt(gate * max(S[i, 0], S[i, 2]))
-    cell = max(np.median(reach), 1.0)
-    x0, x1 = dxy[dr, 0].min(), dxy[dr, 0].max()
-    y0, y1 = dxy[dr, 1].min(), dxy[dr, 1].max()
-    nx, ny = int((x1 - x0) / cell) + 1, int((y1 - y0) / cell) + 1
-    while nx * ny > 4 * dr.size + 16:  # no more cells than a few per detection
-        cell *= 2.0
-        nx, ny = int((x1 - x0) / cell) + 1, int((y1 - y0) / cell) + 1
-    cid = np.empty(dr.size, np.int64)
-    start = np.zeros(nx * ny + 1, np.int64)
-    for b in range(dr.size):
-        j = dr[b]
-        c = int((dxy[j, 0] - x0) / cell) * ny + int((dxy[j, 1] - y0) / cell)
-        cid[b] = c
-        start[c + 1] += 1
-    for c in range(nx * ny):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    members = np.empty(dr.size, np.intp)
-    for b in range(dr.size):
-        members[fill[cid[b]]] = dr[b]
-        fill[cid[b]] += 1
-    for a in range(tr.size):
-        i = tr[a]
-        rx, ry = math.sqrt(gate * S[i, 0]), math.sqrt(gate * S[i, 2])
-        gx0 = max(math.floor((cx[i, 0] - rx - x0) / cell), 0)
-        gx1 = min(math.floor((cx[i, 0] + rx - x0) / cell), nx - 1)
-        gy0 = max(math.floor((cx[i, 1] - ry - y0) / cell), 0)
-        gy1 = min(math.floor((cx[i, 1] + ry - y0) / cell), ny - 1)
-        first = k
-        for gx in range(gx0, gx1 + 1):
-            if gy1 < gy0:
-                break
-            for p in range(start[gx * ny + gy0], start[gx * ny + gy1 + 1]):
-                j = members[p]
-                if abs(dxy[j, 0] - cx[i, 0]) > rx or abs(dxy[j, 1] - cx[i, 1]) > ry:
-                    continue
-                c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w, size_log)
-                if c <= gate:
-                    if k == cap:
-                        cap *= 2
-                        ti, dj, cost = _grow(ti, dj, cost, cap)
-                    ti[k], dj[k], cost[k] = i, j, c
-                    # keep this track's pairs in detection order (insertion, a few at most)
-                    e = k
-                    while e > first and dj[e - 1] > dj[e]:
-                        dj[e - 1], dj[e] = dj[e], dj[e - 1]
-                        cost[e - 1], cost[e] = cost[e], cost[e - 1]
-                        e -= 1
-                    k += 1
-    return ti[:k], dj[:k], cost[:k]
-
-
-@kernel
-def _grow(ti: IntArray, dj: IntArray, cost: FloatArray, cap: int
-          ) -> tuple[IntArray, IntArray, FloatArray]:
-    t2, d2, c2 = np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap, np.float64)
-    k = ti.size
-    t2[:k], d2[:k], c2[:k] = ti, dj, cost
-    return t2, d2, c2
-
-
-@kernel
-def matrix_pairs(cost: FloatArray, tsel: NDArray[np.bool_], dsel: NDArray[np.bool_],
-                 gate: float) -> tuple[IntArray, IntArray, FloatArray]:
-    """The pairs of selected rows and columns of a cost matrix within ``gate``."""
-    n, m = cost.shape
-    k = 0
-    ti = np.empty(n * m, np.intp)
-    dj = np.empty(n * m, np.intp)
-    c = np.empty(n * m, np.float64)
-    for i in range(n):
-        if not tsel[i]:
-            continue
-        for j in range(m):
-            if dsel[j] and cost[i, j] <= gate:
-                ti[k], dj[k], c[k] = i, j, cost[i, j]
-                k += 1
-    return ti[:k], dj[:k], c[:k]
 
 
 # ------------------------------------------------------------------------------------- rules
@@ -251,8 +100,14 @@ def _small_block(block: FloatArray, unmatched: float) -> tuple[IntArray, IntArra
             i -= 1
         if i < 0:
             break
-    keep = best < c
-    return np.flatnonzero(keep), best[keep]
+    rows = np.empty(r, np.intp)
+    k = 0
+    for i in range(r):  # a row on a non-pair (cost unmatched) stays unmatched
+        if best[i] < c and block[i, best[i]] < unmatched:
+            rows[k] = i
+            k += 1
+    rows = rows[:k]
+    return rows, best[rows]
 
 
 @kernel
@@ -303,7 +158,8 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
     nr = 0
     for q in range(p):
         if tdeg[ti[q]] == 1 and ddeg[dj[q]] == 1:
-            det_index[ti[q]] = dj[q]
+            if cost[q] < unmatched:  # worth matching only below the cost of leaving both
+                det_index[ti[q]] = dj[q]
         else:
             rest[nr] = q
             nr += 1
@@ -328,7 +184,8 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
         q1 = q0 + size[r]
         if q1 - q0 == 1:  # one pair: no conflict
             q = order[q0]
-            det_index[ti[q]] = dj[q]
+            if cost[q] < unmatched:
+                det_index[ti[q]] = dj[q]
         else:
             idx = order[q0:q1]
             rows = np.unique(ti[idx])
@@ -354,7 +211,7 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
 @kernel
 def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
               dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8], gate: float,
-              size_w: float, size_log: float, rule: int) -> IntArray:
+              size_w: float, rule: int) -> IntArray:
     """The detection of every track in one frame (−1: none), in two stages by score.
 
     Parameters
@@ -369,9 +226,9 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
     dclass : (M,) int8
         ``HIGH`` (2), ``LOW`` (1) or ``DROPPED`` (0): every track is matched against the high
         detections first, then the tracks left over against the low ones.
-    gate, size_w, size_log, rule
-        The gate on the value, the weight of the size term, the size gate (log of the
-        factor; 0: none) and the rule (:data:`RULE_CODES`).
+    gate, size_w, rule
+        The gate on the value, the weight of the size term and the rule
+        (:data:`RULE_CODES`).
     """
     n, m = cx.shape[0], dxy.shape[0]
     det_index = np.full(n, -1, np.intp)
@@ -388,8 +245,7 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
         if cost.shape[0] == n and cost.shape[1] == m and n > 0:
             ti, dj, c = matrix_pairs(cost, tsel, dsel, gate)
         else:
-            ti, dj, c = quadratic_pairs(cx, S, twh, tsel, dxy, dwh, dsel, gate, size_w,
-                                        size_log)
+            ti, dj, c = quadratic_pairs(cx, S, twh, tsel, dxy, dwh, dsel, gate, size_w)
         solve(ti, dj, c, n, m, rule, gate, det_index)
     return det_index
 
@@ -420,6 +276,15 @@ class Assignment:
     unmatched_tracks: IntArray
     unmatched_dets: IntArray
 
+    def __len__(self) -> int:
+        return int(self.track.size)
+
+    def det_of_track(self, n: int) -> IntArray:
+        """Each of ``n`` tracks' detection row (−1: none)."""
+        out = np.full(n, -1, dtype=np.intp)
+        out[self.track] = self.det
+        return out
+
 
 def assign(
     ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: str = "optimal",
@@ -436,16 +301,16 @@ def assign(
     rule : {"nearest", "greedy", "optimal"}
     unmatched_cost : float, optional
         ``optimal`` only: the cost ``u`` of leaving a track and a detection unmatched (a pair
-        is matched only if that lowers the total); default twice the largest ``|cost|``, so
-        every pair is worth matching on its own.
+        is matched only if that lowers the total); default just above twice the largest
+        ``|cost|``, so every pair is worth matching on its own and one more match is worth
+        up to that much extra cost.
 
     Returns
     -------
     Assignment
     """
     if rule not in RULE_CODES:
-        raise ValueError(f"unknown assignment rule {rule!r}; choose one of: "
-                         f"{', '.join(ASSIGN_RULES)}")
+        raise ValueError(f"unknown rule {rule!r}; choose one of: {', '.join(ASSIGN_RULES)}")
     ti = np.asarray(ti, dtype=np.intp)
     dj = np.asarray(dj, dtype=np.intp)
     cost = np.asarray(cost, dtype=np.float64)
@@ -458,8 +323,9 @@ def assign(
     order = np.lexsort((dj, ti))
     ti, dj, cost = ti[order], dj[order], cost[order]
     u = unmatched_cost
-    if u is None:
-        u = 2.0 * float(np.abs(cost).max()) + 1.0 if cost.size else 1.0
+    if u is None:  # just above twice the largest value: every pair is worth matching
+        big = 2.0 * float(np.abs(cost).max()) if cost.size else 0.0
+        u = big * (1.0 + 1e-9) + 1e-12
     det_index = np.full(n, -1, np.intp)
     solve(ti, dj, cost, n, m, RULE_CODES[rule], float(u), det_index)
     track = np.flatnonzero(det_index >= 0)

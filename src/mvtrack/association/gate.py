@@ -7,7 +7,7 @@ when
 .. math::
     (z - c_i)^T C_i^{-1} (z - c_i) + w_s \\,\\lVert \\ln(wh_d / wh_i) \\rVert^2 \\le g
 
-(:func:`mvtrack.association.assign.quadratic_pairs` finds the pairs, the same value is their
+(:func:`mvtrack.association.pairs.quadratic_pairs` finds the pairs, the same value is their
 cost). Every distance of papers 1 and 2 but two is such a quadratic form about the
 prediction (:func:`shapes`):
 
@@ -26,8 +26,7 @@ matrix (:meth:`Gate.matrix`) and are drawn as nothing.
 
 The size term (``w_s = 1 / σ_s²``, σ_s the standard deviation of the log ratio of a track's
 box sizes from frame to frame) ranks and gates a pair by its box as well as its position: a
-box twice as tall is another object, nearer or farther. ``size_log`` is an optional hard
-size gate on top (heights within ``e^size_log``, widths within its square).
+box twice as tall is another object, nearer or farther.
 """
 
 from __future__ import annotations
@@ -38,8 +37,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.association.assign import matrix_pairs, quadratic_pairs
 from mvtrack.association.distances import get_distance
+from mvtrack.association.pairs import matrix_pairs, quadratic_pairs
 from mvtrack.association.view import TrackView
 
 FloatArray = NDArray[np.float64]
@@ -160,8 +159,6 @@ class Gate:
         ``C`` as ``(c_xx, c_xy, c_yy)`` for the quadratic distances (NaN otherwise).
     size_weight : float
         ``w_s`` of the size term (0: none).
-    size_log : float
-        The hard size gate as the log of its factor (0: none).
     params : dict
         The distance's own parameters.
     """
@@ -171,18 +168,17 @@ class Gate:
     threshold: float
     cov: FloatArray
     size_weight: float = 0.0
-    size_log: float = 0.0
     params: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
     def build(cls, distance: str, view: TrackView, threshold: float, *,
-              size_weight: float = 0.0, size_log: float = 0.0, **params: Any) -> Gate:
+              size_weight: float = 0.0, **params: Any) -> Gate:
         """The gate of ``distance`` for the tracks of ``view``."""
         shape_params = {p: v for p, v in params.items() if p in SHAPE_PARAMS}
         C = shapes(distance, view.cov, view.S, view.velocity, **shape_params)
         cov = np.stack([C[:, 0, 0], 0.5 * (C[:, 0, 1] + C[:, 1, 0]), C[:, 1, 1]], axis=1)
         return cls(distance, view, float(threshold), np.ascontiguousarray(cov),
-                   float(size_weight), float(size_log), dict(params))
+                   float(size_weight), dict(params))
 
     def __len__(self) -> int:
         return len(self.view)
@@ -225,7 +221,7 @@ class Gate:
         dwh = np.ascontiguousarray(dwh, dtype=np.float64)
         if self.quadratic:
             return quadratic_pairs(self.view.xy, self.cov, self.view.wh, tsel, dxy, dwh, dsel,
-                                   self.threshold, self.size_weight, self.size_log)
+                                   self.threshold, self.size_weight)
         return matrix_pairs(self.matrix(dxy, dwh), tsel, dsel, self.threshold)
 
     def regions(self, uid: IntArray, track_id: IntArray) -> GateRegions:

@@ -76,6 +76,14 @@ def register(app: typer.Typer) -> None:
                 metavar="SECONDS",
             ),
         ] = None,
+        masks: Annotated[
+            Path | None,
+            typer.Option(
+                help="Also write each frame's foreground as a 0/255 PNG into this folder "
+                "(DIR/000001.png for the first frame; each file written atomically).",
+                metavar="DIR",
+            ),
+        ] = None,
     ) -> None:
         """Track the moving objects of VIDEO; write results.txt (MOTChallenge), tracks.mp4,
         trajectories.png, summary.json and states.csv (every row's state, its evidence, the
@@ -115,7 +123,8 @@ def register(app: typer.Typer) -> None:
         )
         with run_folder(out, force=force, inputs=[video], kind="track"):
             run = track_video(video, out, settings, fps=settings.frame_rate,
-                              max_frames=max_frames, snapshot=snapshot, flush=flush)
+                              max_frames=max_frames, snapshot=snapshot, flush=flush,
+                              masks=masks)
             tables = write_tables(run, out, settings, fps=fps)
         res, summary = run.result, run.summary
         typer.echo(

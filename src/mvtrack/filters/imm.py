@@ -76,8 +76,8 @@ def imm_predict(x: FloatArray, P: FloatArray, mu: FloatArray, q: FloatArray,
         for j in range(2):
             c = pi[0, j] * mu[t, 0] + pi[1, j] * mu[t, 1]
             mo[t, j] = c
-            w0 = pi[0, j] * mu[t, 0] / c  # μ_{0|j}
-            w1 = 1.0 - w0
+            w0 = pi[0, j] * mu[t, 0] / c if c > 0.0 else 1.0  # μ_{0|j} (a mode of weight 0:
+            w1 = 1.0 - w0  # its mixed state is the steady model's, never used)
             for ax in range(2):
                 p0, v0 = x[t, 0, ax], x[t, 0, 2 + ax]
                 p1, v1 = x[t, 1, ax], x[t, 1, 2 + ax]

@@ -34,8 +34,8 @@ MODE_TIMES = (10.0, 1.0)
 USER_SETTINGS = (
     "predictor", "distance", "assign", "gate", "fps", "measurement_noise", "accel_noise",
     "manoeuvre_noise", "velocity_prior", "size_noise", "confirm_hits", "confirm_score",
-    "max_misses", "lost_std", "coast_std", "score_scale", "score_high", "min_score",
-    "birth_iou",
+    "min_misses", "max_misses", "lost_std", "coast_std", "score_scale", "score_high",
+    "min_score", "birth_iou",
 )
 
 
@@ -85,6 +85,8 @@ class TrackerConfig:
         Detections in consecutive frames that confirm a tentative track.
     confirm_score : float
         The sum of their calibrated scores (:mod:`mvtrack.tracking.scores`) also needed.
+    min_misses : int
+        Frames a confirmed track lives through without detection whatever its uncertainty.
     max_misses : int
         Frames a confirmed track may go without detection at the most.
     lost_std : float or None
@@ -126,6 +128,7 @@ class TrackerConfig:
     size_noise: float | None = 0.25
     confirm_hits: int = 2
     confirm_score: float = 1.0
+    min_misses: int = 3
     max_misses: int = 10
     lost_std: float | None = 0.3
     coast_std: float | None = 0.05
@@ -162,7 +165,7 @@ class TrackerConfig:
         c = self.coast_std
         if c is not None and not (_number(c) and c >= 0 and not math.isnan(c)):
             raise bad("coast_std", "must be a number >= 0 (inf: always) or None")
-        for name in ("confirm_hits", "max_misses", "warmup"):
+        for name in ("confirm_hits", "min_misses", "max_misses", "warmup"):
             v = getattr(self, name)
             low = 1 if name == "confirm_hits" else 0
             if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
@@ -235,6 +238,7 @@ class TrackerConfig:
         p[lc.P_FRAME_W], p[lc.P_FRAME_H] = (-1.0, -1.0) if frame_size is None else frame_size
         p[lc.P_BIRTH_IOU] = math.inf if self.birth_iou is None else self.birth_iou
         p[lc.P_FPS] = self.fps
+        p[lc.P_MIN_MISSES] = self.min_misses
         return p
 
     def settings(self) -> dict[str, Any]:

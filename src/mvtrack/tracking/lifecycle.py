@@ -18,12 +18,14 @@ object, and in what the filter knows, never in seconds:
 - **confirmation**: ``confirm_hits`` detections in consecutive frames whose calibrated scores
   (:mod:`mvtrack.tracking.scores`) sum to at least ``confirm_score`` — two strong boxes, or
   more of weaker ones, make a track; a tentative track dies at its first miss;
-- **coasting and loss**: a confirmed track without detection coasts on its prediction and is
-  **lost** (deleted) once its predicted position is uncertain by more than ``lost_std`` box
-  sizes along either axis (``√P̄_xx > lost_std · w`` or ``√P̄_yy > lost_std · h``), when the
-  filter could no longer tell it from a neighbour — after a few frames for a fast or new
-  object at a low frame rate, after many for a steady one at a high rate — and at the latest
-  after ``max_misses`` frames, or at once when its prediction leaves the image;
+- **coasting and loss**: a confirmed track without detection coasts on its prediction. It
+  lives through ``min_misses`` frames without detection whatever happens (a detector misses
+  a few frames, however many seconds they last), then is **lost** (deleted) once its
+  predicted position is uncertain by more than ``lost_std`` box sizes along either axis
+  (``√P̄_xx > lost_std · w`` or ``√P̄_yy > lost_std · h``), when the filter could no longer
+  tell it from a neighbour — soon for a fast or new object at a low frame rate, late for a
+  steady one at a high rate — and at the latest after ``max_misses`` frames, or at once when
+  its prediction leaves the image;
 - **rows**: a coasting track's row is written while its prediction is certain to within
   ``coast_std`` box sizes; tentative rows only when asked (offline backfilling);
 - **IDs**: public IDs are handed out at confirmation, in birth order.
@@ -59,8 +61,8 @@ N_FLOAT = 7
 
 #: life-cycle parameters as :func:`advance` reads them (:meth:`TrackerConfig.life_cycle`)
 (P_CONFIRM_HITS, P_CONFIRM_SCORE, P_MAX_MISSES, P_LOST_STD, P_COAST_STD, P_SMOOTHING,
- P_TENTATIVE_ROWS, P_FRAME_W, P_FRAME_H, P_BIRTH_IOU, P_FPS) = range(11)
-N_PARAMS = 11
+ P_TENTATIVE_ROWS, P_FRAME_W, P_FRAME_H, P_BIRTH_IOU, P_FPS, P_MIN_MISSES) = range(12)
+N_PARAMS = 12
 
 
 @kernel
@@ -133,7 +135,8 @@ def advance(ints: IntArray, floats: FloatArray, det_index: NDArray[np.intp],
         else:
             ints[i, STATE] = COASTING
             lost = ints[i, MISSES] > p[P_MAX_MISSES]
-            lost |= std[i, 0] > p[P_LOST_STD] * w or std[i, 1] > p[P_LOST_STD] * h
+            lost |= ints[i, MISSES] > p[P_MIN_MISSES] and (
+                std[i, 0] > p[P_LOST_STD] * w or std[i, 1] > p[P_LOST_STD] * h)
             if fw > 0:  # its prediction left the image: the object has left the view
                 lost |= (centre[i, 0] < 0 or centre[i, 0] >= fw or centre[i, 1] < 0
                          or centre[i, 1] >= fh)
@@ -321,15 +324,3 @@ def commit(ints: IntArray, floats: FloatArray, det_index: NDArray[np.intp],
         velocity[a, 0] = velocity[a, 1] = 0.0
     return (ints2, floats2, keep, new, tid, state, det, measured, filtered, predicted, box,
             velocity, uid, next_id, next_uid, speed2, n_speed)
-
-
-def hand_out_ids(ints: IntArray, confirmed_now: BoolArray, next_id: int) -> int:
-    """Give the tracks confirmed this frame consecutive public IDs from ``next_id``, in place.
-
-    Tracks confirmed in the same frame are numbered in order of their internal uid (birth
-    order; rows are kept in uid order), so IDs do not depend on the order of the detections.
-    Returns the next free ID.
-    """
-    idx = confirmed_now.nonzero()[0]
-    ints[idx, TID] = np.arange(next_id, next_id + idx.size)
-    return next_id + int(idx.size)

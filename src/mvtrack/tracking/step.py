@@ -72,7 +72,7 @@ def predict_assign(
         cov[i, 2] = Pc[i, 1, 0] + ry * ry
         std[i, 0], std[i, 1] = math.sqrt(Pc[i, 0, 0]), math.sqrt(Pc[i, 1, 0])
     no_cost = np.zeros((0, 0))
-    det_index = associate(centre, cov, no_cost, wh, dxy, dwh, dclass, gate, size_w, 0.0, rule)
+    det_index = associate(centre, cov, no_cost, wh, dxy, dwh, dclass, gate, size_w, rule)
     return xp, Pp, mp, centre, cov, std, det_index
 
 

@@ -257,7 +257,7 @@ class Tracker:
             cost = self._no_cost if gate.quadratic else gate.matrix(dets.xy, dets.wh)
             det_index = associate(gate.view.xy, gate.cov, np.ascontiguousarray(cost), wh,
                                   dets.xy, dets.wh, dclass, gate.threshold, gate.size_weight,
-                                  gate.size_log, self._rule)
+                                  self._rule)
             centre, c = gate.view.xy, gate.view.cov
             std = np.sqrt(np.stack([c[:, 0, 0], c[:, 1, 1]], axis=1))
         unmatched = ((det_index < 0) & (tab.ints[:, STATE] != TENTATIVE)).nonzero()[0]

@@ -61,6 +61,7 @@ def track_to_folder(
     source_error: Callable[[], str | None] | None = None,
     snapshot: int | None = None,
     flush: float | None = None,
+    masks: str | os.PathLike[str] | None = None,
 ) -> RunOutput:
     """Track ``frames`` and write everything into the folder ``out``.
 
@@ -77,7 +78,10 @@ def track_to_folder(
     - ``trajectories.png`` — every track's path over the first frame;
     - ``summary.json`` — frames, tracks, states histogram, ``processing_speed`` (frames
       processed per second; ``video_fps`` is the frame rate), settings, ``ended_early``;
-    - ``frameNNNNN.png`` — one annotated frame, if ``snapshot`` is given.
+    - ``frameNNNNN.png`` — one annotated frame, if ``snapshot`` is given;
+    - with ``masks``, the front end's foreground of every frame as a 0/255 PNG in that
+      folder (:class:`mvtrack.io.masks.MaskWriter`, one file per frame, each written
+      atomically).
 
     Ctrl-C during the loop ends it early; the files are still written for the frames
     processed (``summary["interrupted"]``).
@@ -121,6 +125,15 @@ def track_to_folder(
         without the video.
     flush : float, optional
         Stream ``results.txt`` and ``states.csv``, appending every ``flush`` seconds (> 0).
+    masks : path, optional
+        Folder for the foreground masks; the front end must have a ``mask`` (every
+        background-model front end has; ``hog`` has not).
+
+    Raises
+    ------
+    InputError
+        ``masks`` with a front end that has no foreground mask, or a folder that cannot be
+        created (before any frame is read).
     """
     import cv2
 
@@ -137,6 +150,7 @@ def track_to_folder(
         detector, tracker = build_detector(settings), build_tracker(settings, fps)
     else:
         detector, tracker = parts
+    mask_writer = _mask_writer(masks, detector) if masks is not None else None
     rescuer = build_rescuer(settings, tracker, detector) if settings.templates else None
     relinker = Relinker(fps, settings.relink) if settings.relink.enabled else None
     out = Path(out)
@@ -178,6 +192,8 @@ def track_to_folder(
             live = LiveAnalytics(scene, scene.fps or fps)
 
         def on_frame(k: int, image: Image, dets: Detections, tracks: TrackFrame) -> None:
+            if mask_writer is not None:
+                mask_writer.write(k, detector.mask, (image.shape[1], image.shape[0]))
             if stream is None:
                 log.append(tracks)
             else:
@@ -266,10 +282,28 @@ def track_to_folder(
     }
     if stream is not None:
         summary["flush_seconds"] = stream.interval
+    if mask_writer is not None:
+        summary["masks"] = {"folder": str(mask_writer.folder), "written": mask_writer.written}
     paths["summary"] = out / "summary.json"
     summary["files"]["summary"] = "summary.json"
     write_json(paths["summary"], summary)
     return RunOutput(result, log, summary, paths)
+
+
+def _mask_writer(folder: str | os.PathLike[str], detector: Any) -> Any:
+    """A :class:`~mvtrack.io.masks.MaskWriter` for ``folder``, or a one-line error when the
+    front end has no foreground mask or the folder cannot be made."""
+    from mvtrack.errors import InputError
+    from mvtrack.io.masks import MaskWriter
+
+    if not hasattr(detector, "mask"):
+        name = getattr(detector, "name", type(detector).__name__)
+        raise InputError(f"--masks: the front end {name!r} has no foreground mask")
+    try:
+        return MaskWriter(folder)
+    except OSError as exc:
+        raise InputError(f"--masks: cannot create the folder {folder} ({exc.strerror or exc})"
+                         ) from None
 
 
 def write_tables(
@@ -340,6 +374,7 @@ def track_video(
     progress: bool | None = None,
     snapshot: int | None = None,
     flush: float | None = None,
+    masks: str | os.PathLike[str] | None = None,
 ) -> RunOutput:
     """Open ``video``, build its parts for its size and frame rate, and :func:`track_to_folder`.
 
@@ -358,7 +393,7 @@ def track_video(
         (:func:`resolve_settings`).
     fps : float, optional
         Frame rate to assume instead of the source's.
-    max_frames, progress, snapshot, flush
+    max_frames, progress, snapshot, flush, masks
         As in :func:`track_to_folder`.
 
     Raises
@@ -384,5 +419,5 @@ def track_video(
             (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
             out=out, max_frames=max_frames, total=src.frame_count, source=str(video),
             progress=progress, parts=parts, source_error=lambda: src.error, snapshot=snapshot,
-            flush=flush,
+            flush=flush, masks=masks,
         )

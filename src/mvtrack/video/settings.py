@@ -10,11 +10,15 @@ from mvtrack.config import RunSettings
 REFERENCE_SIZE = (320, 240)
 
 #: front ends that size their own blob stage (no size-dependent ``min_area``, ``close_size``)
-OWN_BLOB_STAGE = frozenset({"scene"})
+OWN_BLOB_STAGE = frozenset({"scene", "road-users"})
 
 
-#: seconds a tracked pixel is kept out of the disturbance map's background (``hold``)
+#: seconds a tracked pixel is kept out of the disturbance map's background (``hold``), and
+#: seconds a pixel of the road-user front end stays foreground before it is absorbed
 HOLD_SECONDS = 60.0
+
+#: seconds between two ghost tests of the road-user front end
+GHOST_SECONDS = 2.0
 
 
 def resolve_settings(
@@ -47,6 +51,10 @@ def resolve_settings(
       stays foreground and leaves no ghost when it drives on; one that stands longer is
       absorbed (``docs/video-pipeline.md``).
 
+    - for the road-user front end (``"road-users"``): a pixel that stays foreground (a car
+      that waits) is absorbed after ``HOLD_SECONDS`` (``absorb_after``, frames at ``fps``),
+      and ghosts are looked for every ``GHOST_SECONDS`` (``ghost_every``).
+
     The tracker values are only scaled up: images smaller than 320×240 keep them.
 
     The blob-stage defaults are for the front ends whose blobs are found at the frame's size;
@@ -61,6 +69,9 @@ def resolve_settings(
     if settings.detector not in OWN_BLOB_STAGE:
         det.setdefault("min_area", float(round(40.0 * s2)))
         det.setdefault("close_size", 7)
+    if settings.detector == "road-users":  # its times in seconds, at the video's rate
+        det.setdefault("absorb_after", min(max(1, round(HOLD_SECONDS * fps)), 65534))
+        det.setdefault("ghost_every", max(1, round(GHOST_SECONDS * fps)))
     if settings.detector == "disturbance-map":
         det.setdefault("ghost_every", 5)
         det.setdefault("hold", max(1, round(HOLD_SECONDS * fps)))

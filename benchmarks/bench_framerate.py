@@ -1,0 +1,374 @@
+"""The frame-rate sweep: every development sequence at its own frame rate and with every 2nd,
+3rd and 4th frame kept, mvtrack online and offline beside the peers, per cell and on the mean.
+
+For each sequence of ``../shared/data/real`` (MOTChallenge 2D MOT 2015 train: DPM detections
+and ground truth) and ``k = 1, 2, 3, 4`` the detection and ground-truth files keep frames
+1, 1+k, 1+2k, … renumbered (``../shared/peerbench/subsample.py``), and the trackers get the
+frame rate ``fps / k``:
+
+* **mvtrack online** — :class:`mvtrack.tracking.Tracker` stepped over the frames, the rows each
+  step returns;
+* **mvtrack offline** — :func:`mvtrack.tracking.track_detections`, what ``mvtrack
+  track-detections DET --fps F`` writes;
+* **the peers** — ``run_peers.py`` of ``../shared/peerbench`` with its own interpreter
+  (``--peers-python``; the six box trackers of ``sweep-best-peers.tsv``) on the same files;
+  without it, the recorded best peer of ``sweep-best-peers.tsv``.
+
+Everything is scored with peerbench's rules (IoU ≥ 0.5, the ground truth's 0-flagged rows
+dropped), by :mod:`mvtrack.eval`, which equals peerbench's ``metrics.py``
+(``benchmarks/bench_mot15.py`` checks it). Two more modes:
+
+* ``--rules``: every rule of the tracker switched off (or to its plain alternative) one at a
+  time, the change of the mean MOTA and IDF1 over the 16 cells, online and offline;
+* ``--loo``: the principal settings chosen by leave-one-sequence-out: for each sequence held
+  out (at all its ``k``), the value of each setting that does best on the other three, and how
+  that choice scores on the held-out one.
+
+Usage::
+
+    python benchmarks/bench_framerate.py --peers-python /work/peers/bin/python \\
+        --out docs/bench/framerate.md --json benchmarks/data/framerate.json
+    python benchmarks/bench_framerate.py --rules --out docs/bench/rules.md
+    python benchmarks/bench_framerate.py --loo --out docs/bench/defaults.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+SHARED = REPO.parent / "shared"
+DATA = SHARED / "data" / "real"
+PEERBENCH = SHARED / "peerbench"
+#: the development sequences and their frame rates (MOT15 seqinfo)
+SEQUENCES = {"TUD-Campus": 25.0, "TUD-Stadtmitte": 25.0, "ADL-Rundle-6": 30.0, "KITTI-17": 10.0}
+KS = (1, 2, 3, 4)
+#: the peers of sweep-best-peers.tsv (box trackers, IoU-scored)
+PEERS = ("sort-py", "ioutrack-sort", "ioutrack-bytetrack", "sv-bytetrack", "norfair-iou",
+         "motpy")
+MODES = ("online", "offline")
+
+
+def subsample(src: Path, dst: Path, k: int) -> None:
+    """Keep frames 1, 1+k, 1+2k, … of a MOTChallenge file, renumbered (as subsample.py)."""
+    with open(src) as fi, open(dst, "w") as fo:
+        for line in fi:
+            if not line.strip():
+                continue
+            f, rest = line.split(",", 1)
+            f = int(float(f))
+            if (f - 1) % k == 0:
+                fo.write(f"{(f - 1) // k + 1},{rest}")
+
+
+def cells(work: Path, seqs: dict[str, float] | None = None) -> list[dict[str, Any]]:
+    """The sweep's cells: sequence, k, frame rate and the subsampled files."""
+    out = []
+    for seq, fps in (seqs or SEQUENCES).items():
+        for k in KS:
+            d = work / f"{seq}-{k}"
+            d.mkdir(parents=True, exist_ok=True)
+            subsample(DATA / seq / "det.txt", d / "det.txt", k)
+            subsample(DATA / seq / "gt.txt", d / "gt.txt", k)
+            out.append({"seq": seq, "k": k, "fps": fps / k, "dir": d})
+    return out
+
+
+def score(gt: Path, results: Any) -> dict[str, float]:
+    """MOTA, IDF1 and counts with peerbench's rules."""
+    from mvtrack.eval.metrics import evaluate
+
+    s = evaluate(gt, results, 0.5, ignore="drop", with_hota=False)
+    return {k: float(s[k]) for k in ("MOTA", "IDF1", "IDSW", "FP", "FN")}
+
+
+def run_mvtrack(cell: dict[str, Any], changes: dict[str, Any] | None = None,
+                offline: dict[str, bool] | None = None) -> dict[str, dict[str, float]]:
+    """mvtrack online and offline on one cell, scored."""
+    from mvtrack.io.mot import MotTable, read_detections
+    from mvtrack.tracking import Tracker, TrackLog, preset, track_detections
+
+    frames = read_detections(cell["dir"] / "det.txt")
+    config = preset("default", fps=cell["fps"], **(changes or {}))
+    tracker, log = Tracker(config), TrackLog()
+    for d in frames:
+        log.append(tracker.step(d))
+    online = MotTable.from_rows(log.to_mot())
+    off = track_detections(frames, config, **(offline or {}))
+    offline_rows = MotTable.from_rows(off.to_mot())
+    gt = cell["dir"] / "gt.txt"
+    return {"online": score(gt, online), "offline": score(gt, offline_rows)}
+
+
+def run_peers(python: str, cell: dict[str, Any]) -> dict[str, dict[str, float]]:
+    """The six peers on one cell through peerbench (its interpreter, its scoring)."""
+    out = cell["dir"] / "peers.json"
+    cmd = [python, str(PEERBENCH / "run_peers.py"), "--det", str(cell["dir"] / "det.txt"),
+           "--gt", str(cell["dir"] / "gt.txt"), "--fps", str(cell["fps"]), "--repeats", "1",
+           "--trackers", *PEERS, "--json", str(out)]
+    subprocess.run(cmd, check=True, capture_output=True, timeout=1800)
+    rows = json.loads(out.read_text())["rows"]
+    return {r["tracker"]: {"MOTA": r["accuracy"]["iou"]["mota"],
+                           "IDF1": r["accuracy"]["iou"]["idf1"]}
+            for r in rows if "iou" in r.get("accuracy", {})}
+
+
+def recorded_best() -> dict[tuple[str, int], dict[str, float]]:
+    """The best peer per cell recorded in ``sweep-best-peers.tsv``."""
+    best = {}
+    for line in (PEERBENCH / "sweep-best-peers.tsv").read_text().splitlines():
+        if not line.strip() or line.startswith("#"):
+            continue
+        seq, k, _, m, i = line.split()
+        best[(seq, int(k))] = {"MOTA": float(m), "IDF1": float(i)}
+    return best
+
+
+def sweep(work: Path, python: str | None) -> dict[str, Any]:
+    """Every cell: mvtrack online and offline, the peers, the best peer per metric."""
+    recorded = recorded_best()
+    result = []
+    for cell in cells(work):
+        row: dict[str, Any] = {"seq": cell["seq"], "k": cell["k"], "fps": cell["fps"]}
+        t0 = time.perf_counter()
+        row.update(run_mvtrack(cell))
+        row["mvtrack_seconds"] = time.perf_counter() - t0
+        if python:
+            peers = run_peers(python, cell)
+            row["peers"] = peers
+            row["best"] = {m: max(p[m] for p in peers.values()) for m in ("MOTA", "IDF1")}
+            row["best_of"] = {m: max(peers, key=lambda n, m=m: peers[n][m])
+                              for m in ("MOTA", "IDF1")}
+        else:
+            row["best"] = recorded[(cell["seq"], cell["k"])]
+            row["best_of"] = {"MOTA": "recorded", "IDF1": "recorded"}
+        result.append(row)
+        print(f"{cell['seq']:15s} k={cell['k']} " + " ".join(
+            f"{m} {row[m]['MOTA']:.3f}/{row[m]['IDF1']:.3f}" for m in MODES)
+            + f"  best peer {row['best']['MOTA']:.3f}/{row['best']['IDF1']:.3f}", flush=True)
+    return {"cells": result}
+
+
+def means(rows: list[dict[str, Any]], key: str) -> tuple[float, float]:
+    return (float(np.mean([r[key]["MOTA"] for r in rows])),
+            float(np.mean([r[key]["IDF1"] for r in rows])))
+
+
+def report(res: dict[str, Any], command: str) -> str:
+    """The sweep as Markdown."""
+    rows = res["cells"]
+    lines = ["## The frame-rate sweep: mvtrack beside the peers", "",
+             f"Command: `{command}`", "",
+             "Each development sequence with every k-th frame kept (frames renumbered, "
+             "`--fps fps/k`), the same files for every tracker, scored with peerbench's rules "
+             "(IoU ≥ 0.5, the ground truth's 0-flagged rows dropped). Best peer: the best of "
+             f"{', '.join(PEERS)} per metric (it may be two different peers). **Bold**: below "
+             "the best peer.", "",
+             "| sequence | k | fps | online MOTA / IDF1 | offline MOTA / IDF1 | best peer MOTA "
+             "/ IDF1 |", "|---|---:|---:|---|---|---|"]
+    behind = {m: 0 for m in MODES}
+
+    def fmt(v: dict[str, float], best: dict[str, float], mode: str) -> str:
+        parts = []
+        lost = False
+        for m in ("MOTA", "IDF1"):
+            s = f"{v[m]:.3f}"
+            if v[m] < best[m] - 1e-4:
+                s, lost = f"**{s}**", True
+            parts.append(s)
+        behind[mode] += lost
+        return " / ".join(parts)
+
+    for r in rows:
+        best = r["best"]
+        names = r.get("best_of", {})
+        who = "" if names.get("MOTA") == "recorded" else \
+            f" ({names.get('MOTA')}, {names.get('IDF1')})"
+        lines.append(f"| {r['seq']} | {r['k']} | {r['fps']:.3g} | "
+                     f"{fmt(r['online'], best, 'online')} | "
+                     f"{fmt(r['offline'], best, 'offline')} | "
+                     f"{best['MOTA']:.3f} / {best['IDF1']:.3f}{who} |")
+    on, off, bp = means(rows, "online"), means(rows, "offline"), means(rows, "best")
+    lines += [f"| **mean of {len(rows)}** | | | {on[0]:.3f} / {on[1]:.3f} | "
+              f"{off[0]:.3f} / {off[1]:.3f} | {bp[0]:.3f} / {bp[1]:.3f} |", "",
+              f"Cells behind the best peer on MOTA or IDF1: online {behind['online']}, "
+              f"offline {behind['offline']} of {len(rows)}. Mean lead over the best peer: "
+              f"online {on[0] - bp[0]:+.3f} / {on[1] - bp[1]:+.3f}, offline "
+              f"{off[0] - bp[0]:+.3f} / {off[1] - bp[1]:+.3f}.", ""]
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- rules, on / off
+
+#: each rule of the tracker and the configuration without it (one change at a time)
+RULES: dict[str, tuple[dict[str, Any], dict[str, bool]]] = {
+    "IMM (kalman-imm; off: kalman-cv, the steady model alone)": ({"predictor": "kalman-cv"},
+                                                                {}),
+    "size term of the gate (size_noise; off: position only)": ({"size_noise": None}, {}),
+    "two stages by score (score_high; off: every detection high)": ({"score_high": None}, {}),
+    "dropped weak boxes (min_score 0.1; off: 0)": ({"min_score": 0.0}, {}),
+    "no birth on a tracked object (birth_iou; off: None)": ({"birth_iou": None}, {}),
+    "confirmation by score (confirm_score 1; off: 0)": ({"confirm_score": 0.0}, {}),
+    "loss by uncertainty (lost_std; off: max_misses only)": ({"lost_std": None}, {}),
+    "lives through min_misses (3; off: 0)": ({"min_misses": 0}, {}),
+    "coasting rows while certain (coast_std 0.05; off: None)": ({"coast_std": None}, {}),
+    "backfill (offline)": ({}, {"backfill_rows": False}),
+    "interpolation (offline)": ({}, {"interpolate": False}),
+}
+
+
+def rules(work: Path) -> dict[str, Any]:
+    """The mean MOTA and IDF1 over the cells with each rule off, against the default."""
+    cs = cells(work)
+    base = [run_mvtrack(c) for c in cs]
+    out = {"default": {m: means(base, m) for m in MODES}, "rules": {}}
+    for name, (changes, offline) in RULES.items():
+        runs = [run_mvtrack(c, changes, offline) for c in cs]
+        out["rules"][name] = {m: means(runs, m) for m in MODES}
+        d = {m: np.subtract(out["default"][m], out["rules"][name][m]) for m in MODES}
+        print(f"{name}: gain online {d['online'][0]:+.4f}/{d['online'][1]:+.4f} offline "
+              f"{d['offline'][0]:+.4f}/{d['offline'][1]:+.4f}", flush=True)
+    return out
+
+
+def rules_report(res: dict[str, Any], command: str) -> str:
+    base = res["default"]
+    lines = ["## The gain of every rule on the frame-rate sweep", "",
+             f"Command: `{command}`", "",
+             "Each rule switched off alone (the rest at the default), the mean MOTA and IDF1 "
+             "over the 16 cells (4 sequences × every 1st–4th frame). Gain = default minus "
+             "without the rule; a rule whose gain is under 0.005 on both metrics in both modes "
+             "does not earn its place on these data.", "",
+             f"Default: online {base['online'][0]:.3f} / {base['online'][1]:.3f}, offline "
+             f"{base['offline'][0]:.3f} / {base['offline'][1]:.3f}.", "",
+             "| rule | online gain MOTA / IDF1 | offline gain MOTA / IDF1 |", "|---|---|---|"]
+    for name, r in res["rules"].items():
+        g = {m: np.subtract(base[m], r[m]) for m in MODES}
+        lines.append(f"| {name} | {g['online'][0]:+.3f} / {g['online'][1]:+.3f} | "
+                     f"{g['offline'][0]:+.3f} / {g['offline'][1]:+.3f} |")
+    return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- leave one out
+
+#: the principal settings and the values tried (the default among them)
+GRID: dict[str, tuple[Any, ...]] = {
+    "measurement_noise": (0.07, 0.1, 0.14),
+    "accel_noise": (0.5, 1.0, 2.0),
+    "manoeuvre_noise": (10.0, 25.0, 50.0),
+    "velocity_prior": (1.0, 1.5, 3.0),
+    "size_noise": (0.15, 0.25, 0.4),
+    "lost_std": (0.2, 0.3, 0.5),
+    "birth_iou": (0.2, 0.3, 0.5),
+    "confirm_score": (0.8, 1.0, 1.3),
+}
+
+
+def _objective(runs: list[dict[str, dict[str, float]]]) -> float:
+    """The mean of MOTA and IDF1, online and offline."""
+    return float(np.mean([r[m][k] for r in runs for m in MODES for k in ("MOTA", "IDF1")]))
+
+
+def loo(work: Path) -> dict[str, Any]:
+    """For each sequence held out: each setting's best value on the other three (one setting
+    at a time, the others at the default), and the held-out score of the default and of the
+    fold's choice."""
+    from mvtrack.tracking import TrackerConfig
+
+    cs = cells(work)
+    default = TrackerConfig()
+    cache: dict[tuple[str, Any], list[dict[str, dict[str, float]]]] = {}
+    for name, values in GRID.items():
+        for v in values:
+            cache[(name, v)] = [run_mvtrack(c, {name: v}) for c in cs]
+        print(f"grid {name} done", flush=True)
+    folds = {}
+    for held in SEQUENCES:
+        train = [i for i, c in enumerate(cs) if c["seq"] != held]
+        test = [i for i, c in enumerate(cs) if c["seq"] == held]
+        choice = {}
+        for name, values in GRID.items():
+            scored = {v: _objective([cache[(name, v)][i] for i in train]) for v in values}
+            choice[name] = max(scored, key=scored.get)
+        chosen = [run_mvtrack(cs[i], choice) for i in test]
+        base = [cache[(next(iter(GRID)), getattr(default, next(iter(GRID))))][i] for i in test]
+        folds[held] = {"choice": choice, "held_out_choice": _objective(chosen),
+                       "held_out_default": _objective(base),
+                       "cells_choice": [{m: r[m] for m in MODES} for r in chosen]}
+        print(held, folds[held]["choice"], f"{folds[held]['held_out_choice']:.4f} vs default "
+              f"{folds[held]['held_out_default']:.4f}", flush=True)
+    votes = {name: {} for name in GRID}
+    for f in folds.values():
+        for name, v in f["choice"].items():
+            votes[name][v] = votes[name].get(v, 0) + 1
+    return {"folds": folds, "votes": {n: {str(k): c for k, c in v.items()}
+                                      for n, v in votes.items()},
+            "default": {n: getattr(default, n) for n in GRID}}
+
+
+def loo_report(res: dict[str, Any], command: str) -> str:
+    lines = ["## Defaults by leave-one-sequence-out over the frame-rate sweep", "",
+             f"Command: `{command}`", "",
+             "For each sequence held out at all four frame rates, every principal setting is "
+             "chosen among the values below on the other three sequences (one setting at a "
+             "time, the others at the default; objective: the mean of MOTA and IDF1, online "
+             "and offline, over their 12 cells), and the fold's choices together are scored on "
+             "the held-out sequence beside the default.", "",
+             "| setting | values tried | default | chosen in the 4 folds |", "|---|---|---|---|"]
+    for name, values in GRID.items():
+        lines.append(f"| `{name}` | {', '.join(map(str, values))} | {res['default'][name]} | "
+                     + ", ".join(f"{v} ×{c}" for v, c in res["votes"][name].items()) + " |")
+    lines += ["", "| held out | the fold's choices (those that differ from the default) | "
+              "held-out score, fold's choice | held-out score, default |", "|---|---|---|---|"]
+    for held, f in res["folds"].items():
+        diff = {k: v for k, v in f["choice"].items() if v != res["default"][k]}
+        lines.append(f"| {held} | {diff or 'the default'} | {f['held_out_choice']:.4f} | "
+                     f"{f['held_out_default']:.4f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--peers-python", default=None,
+                    help="the peers' interpreter (peerbench's setup.sh); without it the "
+                    "recorded best peers of sweep-best-peers.tsv are used")
+    ap.add_argument("--rules", action="store_true", help="each rule on / off instead")
+    ap.add_argument("--loo", action="store_true", help="leave-one-sequence-out instead")
+    ap.add_argument("--out", default=None, help="write the Markdown table here")
+    ap.add_argument("--json", default=None, help="write the figures here")
+    args = ap.parse_args(argv)
+    if not DATA.is_dir():
+        print(f"error: {DATA} not found (the development sequences)", file=sys.stderr)
+        return 2
+    command = "python benchmarks/bench_framerate.py " + " ".join(argv or sys.argv[1:])
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        if args.rules:
+            res = rules(work)
+            text = rules_report(res, command)
+        elif args.loo:
+            res = loo(work)
+            text = loo_report(res, command)
+        else:
+            res = sweep(work, args.peers_python)
+            text = report(res, command)
+    print(text)
+    if args.out:
+        Path(args.out).write_text(text)
+    if args.json:
+        Path(args.json).write_text(json.dumps(res, indent=1, default=str))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

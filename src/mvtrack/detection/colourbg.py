@@ -1,0 +1,473 @@
+r"""A per-pixel colour background in a few OpenCV passes a frame: the road-user front end's model.
+
+:class:`ColourBackground` keeps, per pixel ``p`` of the working frame, a colour mean
+:math:`\mu(p)` and a noise level :math:`\sigma(p)`, and calls ``p`` foreground when the
+distance of the frame :math:`I` to the background,
+
+.. math::
+
+    d(p) = \max_c \max\big(\check\mu_c(p) - I_c(p),\; I_c(p) - \hat\mu_c(p),\; 0\big)  \qquad (1)
+
+with :math:`\check\mu, \hat\mu` the minimum and maximum of :math:`\mu` over the
+:math:`(2j+1)^2` neighbourhood of ``p`` (``jitter = j``: a pixel that matches the
+background one pixel away is background, so a camera that shakes by a pixel does not light
+up every edge), exceeds
+
+.. math::
+
+    \theta(p) = \max\big(\lambda\,\sigma(p),\; d_{\min} \cdot
+                 \mathrm{clip}(\max_c \mu_c(p) / 128,\; 0.35,\; 1)\big),   \qquad (2)
+
+the noise threshold or a floor that follows the background's brightness (in the shade an
+object shows less contrast). The update is *selective*:
+
+.. math::
+
+    \mu \leftarrow \mu + \alpha_p (I - \mu), \qquad
+    \sigma^2 \leftarrow \sigma^2 + \alpha (d^2 - \sigma^2) \text{ on background pixels not held},
+    \qquad \alpha_p = \begin{cases} \alpha & \text{background} \\
+                                     \alpha_{\text{slow}} & \text{foreground} \\
+                                     0 & \text{held} \end{cases}   \qquad (3)
+
+so an object that stops (a car at a red light) stays foreground and leaves the road behind it
+when it drives on: no ghost. A pixel foreground for ``absorb_after`` frames in a row is
+absorbed whole (set to the frame): an object that parks becomes background on purpose. Pixels
+the caller *holds* (the boxes of tracked objects) are not learnt at all, for up to
+``absorb_after`` frames.
+
+Ghosts — a background that holds an object which has since left, e.g. a car that stood in the
+bootstrap frames — are foreground blobs whose outline has the background's edges and not the
+frame's (:func:`~mvtrack.detection.ghosts.ghost_pixels`); every ``ghost_every`` frames their
+pixels are reset to the frame.
+
+Shadows (``shadows=True``, Cucchiara et al.'s test with a texture test): a candidate pixel
+darker than the background in every channel, with a brightness ratio in ``shadow_ratio``, is
+a shadow when either its colour is kept (chromaticities within ``shadow_chroma``) and it adds
+no texture of its own (its 3×3 grey-level spread at most the background's, scaled by the
+ratio, plus ``shadow_texture``: a dark grey car on a grey road keeps the road's colour but
+brings its own edges), or the background's texture is kept under a change of colour (a
+shadow lit by the blue sky: the 3×3 correlation of frame and background above
+``shadow_correlation`` on a background with texture). The test runs on the candidates only
+(sparse gathers), not on the whole frame.
+
+Cost: the mean, its neighbourhood extremes and the threshold map of eq. (2) are refreshed every
+``refresh`` frames (they change at the rate α), and so are the noise and the count of frames a
+pixel has been busy (a pixel is absorbed within ``refresh`` frames of ``absorb_after``); every
+frame costs two saturated subtractions, two channel maxima, one compare and the masked update
+of the mean — all ``uint8`` or one-channel passes but the last.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+Image = NDArray[np.uint8]
+
+#: a blob is a ghost when its outline's edges in the background are this many times its
+#: edges in the frame (:func:`~mvtrack.detection.ghosts.ghost_blobs`)
+GHOST_RATIO = 2.0
+
+
+_ROW3 = np.ones((1, 3), np.uint8)
+
+
+def _channel_max(img: Image) -> Image:
+    """Largest of the three channels per pixel: the interleaved row ``b g r b g r ...``
+    dilated by a 1×3 window anchored at its left end holds each pixel's maximum at the
+    pixel's first channel (one pass and a strided copy, about twice as fast as splitting the
+    channels)."""
+    h, w = img.shape[:2]
+    row = cv2.dilate(img.reshape(h, 3 * w), _ROW3, anchor=(0, 0),
+                     borderType=cv2.BORDER_REPLICATE)
+    return np.ascontiguousarray(row[:, ::3])
+
+
+class ColourBackground:
+    """Per-pixel colour mean and noise with a selective update (module docstring).
+
+    Parameters
+    ----------
+    alpha : float, default 0.02
+        Learning rate of background pixels, eq. (3) (a memory of about 50 frames).
+    alpha_slow : float, default 0
+        Learning rate of foreground pixels, eq. (3); 0 keeps an object whole until it is
+        absorbed.
+    absorb_after : int, default 600
+        Consecutive foreground (or held) frames after which a pixel is absorbed; 0 never.
+    k_sigma : float, default 3.5
+        :math:`\\lambda` of eq. (2).
+    min_diff : float, default 18
+        :math:`d_{\\min}` of eq. (2), grey levels of the largest channel.
+    init_sigma, min_sigma : float, default 6 and 2
+        Noise of a fresh background, and its floor.
+    jitter : int, default 1
+        :math:`j` of eq. (1); 0 compares each pixel with its own background only.
+    shadows : bool, default True
+        Leave shadow pixels out of the foreground.
+    shadow_ratio : (float, float), default (0.2, 0.95)
+        Brightness ratios frame / background a shadow may have.
+    shadow_chroma : float, default 0.03
+        Largest L1 distance of the chromaticities ``(b, g, r) / (b + g + r)``.
+    shadow_texture : float, default 2
+        Grey levels of local spread a shadow of the background's colour may add to the
+        background's.
+    shadow_correlation, shadow_min_texture : float, default 0.8 and 3
+        A candidate whose colour changed is a shadow when the frame's grey levels correlate
+        with the background's over a 3×3 window by more than ``shadow_correlation`` and the
+        background has a local spread of at least ``shadow_min_texture`` grey levels.
+    shadow_step : int, default 2
+        The shadow test runs on every ``shadow_step``-th candidate of each row and column,
+        each tested pixel deciding for its cell (a shadow is a region, not a pixel).
+    ghost_every : int, default 10
+        Frames between ghost tests (0 never).
+    refresh : int, default 8
+        Frames between refreshes of the threshold map and the neighbourhood extremes, and
+        between updates of the noise and of the count that absorbs a pixel.
+
+    Attributes
+    ----------
+    mean : (H, W, 3) float32 or None
+        :math:`\\mu`.
+    var : (H, W) float32 or None
+        :math:`\\sigma^2`.
+    distance : (H, W) uint8 or None
+        :math:`d` of eq. (1) for the last frame (a reused buffer).
+    """
+
+    def __init__(
+        self,
+        alpha: float = 0.02,
+        alpha_slow: float = 0.0,
+        absorb_after: int = 600,
+        k_sigma: float = 3.5,
+        min_diff: float = 18.0,
+        init_sigma: float = 6.0,
+        min_sigma: float = 2.0,
+        jitter: int = 1,
+        shadows: bool = True,
+        shadow_ratio: tuple[float, float] = (0.2, 0.95),
+        shadow_chroma: float = 0.03,
+        shadow_texture: float = 2.0,
+        shadow_correlation: float = 0.8,
+        shadow_min_texture: float = 3.0,
+        shadow_step: int = 2,
+        ghost_every: int = 10,
+        refresh: int = 8,
+    ) -> None:
+        for name, value in (("alpha", alpha), ("alpha_slow", alpha_slow)):
+            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+                raise ValueError(f"{name} must be in [0, 1], got {value}")
+        if not alpha_slow <= alpha:
+            raise ValueError(f"alpha_slow ({alpha_slow}) must not exceed alpha ({alpha})")
+        if not (math.isfinite(k_sigma) and k_sigma > 0):
+            raise ValueError(f"k_sigma must be a positive number, got {k_sigma}")
+        if not (math.isfinite(min_diff) and 0 <= min_diff < 255):
+            raise ValueError(f"min_diff must be in [0, 255) grey levels, got {min_diff}")
+        if not (0 < min_sigma <= init_sigma):
+            raise ValueError(f"need 0 < min_sigma <= init_sigma, got {min_sigma}, {init_sigma}")
+        for name, value in (("absorb_after", absorb_after), ("jitter", jitter),
+                            ("ghost_every", ghost_every)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise ValueError(f"{name} must be a whole number >= 0, got {value!r}")
+        if isinstance(refresh, bool) or not isinstance(refresh, int) or refresh < 1:
+            raise ValueError(f"refresh must be a whole number >= 1, got {refresh!r}")
+        lo, hi = shadow_ratio
+        if not (0 < lo < hi):
+            raise ValueError(f"shadow_ratio must be 0 < lo < hi, got {shadow_ratio}")
+        self.alpha = float(alpha)
+        self.alpha_slow = float(alpha_slow)
+        self.absorb_after = min(int(absorb_after), 65534)
+        self.k_sigma = float(k_sigma)
+        self.min_diff = float(min_diff)
+        self.init_sigma = float(init_sigma)
+        self.min_sigma = float(min_sigma)
+        self.jitter = int(jitter)
+        self.shadows = bool(shadows)
+        self.shadow_ratio = (float(lo), float(hi))
+        self.shadow_chroma = float(shadow_chroma)
+        self.shadow_texture = float(shadow_texture)
+        self.shadow_correlation = float(shadow_correlation)
+        self.shadow_min_texture = float(shadow_min_texture)
+        if isinstance(shadow_step, bool) or not isinstance(shadow_step, int) or shadow_step < 1:
+            raise ValueError(f"shadow_step must be a whole number >= 1, got {shadow_step!r}")
+        self.shadow_step = int(shadow_step)
+        self.ghost_every = int(ghost_every)
+        self.refresh = int(refresh)
+        self._alpha_refresh = 1.0 - (1.0 - self.alpha) ** self.refresh
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    def reset(self) -> None:
+        """Forget the model."""
+        self.mean: NDArray[np.float32] | None = None
+        self.var: NDArray[np.float32] | None = None
+        self.distance: Image | None = None
+        self.frames_seen = 0
+        self._kernel = (None if self.jitter == 0
+                        else np.ones((2 * self.jitter + 1,) * 2, np.uint8))
+        level = np.arange(256, dtype=np.float64)  # eq. (2)'s floor of each brightness
+        self._floor_table = np.floor(self.min_diff * np.clip(level / 128.0, 0.35, 1.0)).astype(
+            np.uint8)
+        self._stale = True
+
+    def bootstrap(self, background: Image) -> None:
+        """Start from a known background (e.g. the temporal median of the first frames)."""
+        bg = _bgr(np.asarray(background))
+        h, w = bg.shape[:2]
+        self.mean = bg.astype(np.float32)
+        self.var = np.full((h, w), self.init_sigma**2, np.float32)
+        self._run = np.zeros((h, w), np.uint16)  # consecutive frames foreground or held
+        self._d = np.empty((h, w), np.uint8)
+        self._fg = np.empty((h, w), np.uint8)
+        self._d32 = np.empty((h, w), np.float32)
+        self._stale = True
+
+    def _refresh(self) -> None:
+        """The background as ``uint8``, its neighbourhood extremes and the threshold of
+        eq. (2) as ``uint8`` (the noise term rounded, the floor read from a table of the
+        256 brightnesses)."""
+        self._mu8 = cv2.convertScaleAbs(self.mean)
+        if self._kernel is None:
+            self._lo = self._hi = self._mu8
+        else:
+            self._lo = cv2.erode(self._mu8, self._kernel)
+            self._hi = cv2.dilate(self._mu8, self._kernel)
+        np.maximum(self.var, np.float32(self.min_sigma**2), out=self.var)
+        noise = cv2.convertScaleAbs(cv2.sqrt(self.var), alpha=self.k_sigma)  # λ σ
+        floor = cv2.LUT(_channel_max(self._mu8), self._floor_table)
+        self._thr = cv2.min(cv2.max(noise, floor), 254.0)
+        if self.ghost_every:  # the background's edges, for the ghost test
+            self._mu_edges = _edges(cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY))
+        if self.shadows:  # the grey background (padded) and its local spread, for shadows
+            self._mu_grey = cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY)
+            self._mu_grey_pad = cv2.copyMakeBorder(self._mu_grey, 1, 1, 1, 1,
+                                                   cv2.BORDER_REPLICATE)
+            grey = self._mu_grey.astype(np.float32)
+            mean = cv2.blur(grey, (3, 3))
+            self._mu_spread = cv2.sqrt(cv2.max(cv2.blur(grey * grey, (3, 3)) - mean * mean, 0.0))
+        self._stale = False
+
+    # ------------------------------------------------------------------ frames
+    def apply(self, frame: Image, held: Image | None = None) -> Image | None:
+        """Foreground of ``frame`` (0/255 ``uint8``, a reused buffer), then the update.
+
+        Parameters
+        ----------
+        frame : (H, W, 3) or (H, W) uint8
+            The working frame.
+        held : (H, W) uint8, optional
+            Pixels not to learn this frame (non-zero), e.g. inside the boxes of tracked
+            objects; held for ``absorb_after`` frames in a row they are absorbed as well.
+
+        Returns
+        -------
+        (H, W) uint8 or None
+            None for the first frame without a :meth:`bootstrap` (it becomes the background).
+        """
+        img = _bgr(frame)
+        self.frames_seen += 1
+        if self.mean is None or self.mean.shape != img.shape:
+            self.bootstrap(img)
+            return None
+        if self._stale or self.frames_seen % self.refresh == 0:
+            self._refresh()
+        up = cv2.subtract(img, self._hi)  # brighter than the neighbourhood, per channel
+        d3 = cv2.max(cv2.subtract(self._lo, img), up)  # eq. (1)
+        d = self._d = _channel_max(d3)
+        fg = cv2.compare(d, self._thr, cv2.CMP_GT, dst=self._fg)  # eq. (2)
+        self.distance = d
+        if self.shadows:  # a shadow is darker in every channel: not brighter in any
+            darker = cv2.compare(_channel_max(up), 0, cv2.CMP_EQ)
+            self._remove_shadows(img, fg, cv2.bitwise_and(fg, darker))
+        if self.ghost_every and self.frames_seen % self.ghost_every == 0:
+            self._remove_ghosts(img, fg)
+        self._update(img, fg, held)
+        return fg
+
+    def _update(self, img: Image, fg: Image, held: Image | None) -> None:
+        """Eq. (3) every frame for the mean; every ``refresh`` frames for the noise (at the
+        rate of ``refresh`` frames, :math:`1 - (1 - \\alpha)^{refresh}`) and for the count of
+        frames a pixel has been busy (foreground or held), which absorbs it."""
+        busy = fg if held is None else cv2.bitwise_or(fg, held)
+        learn = cv2.bitwise_not(busy)
+        cv2.accumulateWeighted(img, self.mean, self.alpha, mask=learn)  # eq. (3), background
+        if self.alpha_slow > 0:
+            slow = fg if held is None else cv2.bitwise_and(fg, cv2.bitwise_not(held))
+            cv2.accumulateWeighted(img, self.mean, self.alpha_slow, mask=slow)
+        if self.frames_seen % self.refresh:
+            return
+        d32 = self._d32
+        cv2.multiply(self._d, self._d, dst=d32, dtype=cv2.CV_32F)  # d² on the background
+        cv2.accumulateWeighted(d32, self.var, self._alpha_refresh, mask=learn)
+        if self.absorb_after:
+            run = self._run
+            cv2.add(run, float(self.refresh), dst=run, mask=busy)  # frames busy in a row
+            cv2.bitwise_and(run, 0.0, dst=run, mask=learn)
+            done = cv2.compare(run, float(self.absorb_after), cv2.CMP_GE)
+            if cv2.countNonZero(done):
+                cv2.accumulateWeighted(img, self.mean, 1.0, mask=done)  # absorbed whole
+                cv2.bitwise_and(run, 0.0, dst=run, mask=done)
+                self._stale = True
+
+    def _remove_shadows(self, img: Image, fg: Image, cand: Image) -> None:
+        """Shadow pixels of ``fg`` set to 0 (the test of the module docstring, on the
+        candidates ``cand`` only: the ratio first, then the colour or the texture).
+        Integer arithmetic on the gathered pixels; the windows are read from padded grey
+        images by flat index, without bounds checks."""
+        grid = cand[:: self.shadow_step, :: self.shadow_step]
+        pts = cv2.findNonZero(grid)
+        if pts is None:
+            return
+        w = fg.shape[1]
+        pts = pts.reshape(-1, 2) * self.shadow_step
+        idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
+        f = img.reshape(-1, 3)[idx].astype(np.int32) + 1
+        m = self._mu8.reshape(-1, 3)[idx].astype(np.int32) + 1
+        lf, lm = f.sum(axis=1), m.sum(axis=1)
+        lo, hi = self.shadow_ratio
+        sel = (lf >= lo * lm) & (lf <= hi * lm)
+        if not sel.any():
+            return
+        idx, f, m, lf, lm = idx[sel], f[sel], m[sel], lf[sel], lm[sel]
+        # the colour kept: Σ_c |f_c / L_f − m_c / L_m| < τ, multiplied out by L_f L_m
+        cross = np.abs(f * lm[:, None] - m * lf[:, None]).sum(axis=1)
+        shadow = cross < self.shadow_chroma * (lf * lm).astype(np.float64)
+        grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
+                                  cv2.BORDER_REPLICATE)
+        pidx = idx + (idx // w) * 2 + (w + 2) + 1  # the same pixels in the padded images
+        if shadow.any():  # ... and no texture of its own (a flat surface in the shade)
+            at = pidx[shadow]
+            s_f, _, _ = _window_stats(grey, None, at, w + 2)
+            ratio = lf[shadow] / lm[shadow]
+            flat = s_f <= ratio * self._mu_spread.reshape(-1)[idx[shadow]] + (
+                self.shadow_texture)
+            shadow[np.flatnonzero(shadow)[~flat]] = False
+        # ... or the background's texture kept under a change of colour (a shadow lit by the
+        # blue sky): the frame correlates with a textured background (3×3)
+        rest = np.flatnonzero(~shadow)
+        rest = rest[self._mu_spread.reshape(-1)[idx[rest]] > self.shadow_min_texture]
+        if rest.size:
+            _, _, rho = _window_stats(grey, self._mu_grey_pad, pidx[rest], w + 2)
+            shadow[rest] = rho > self.shadow_correlation
+        if self.shadow_step == 1:
+            fg.reshape(-1)[idx[shadow]] = 0
+            return
+        # each tested pixel speaks for its cell of the grid: the cells of the shadow pixels
+        # are cleared where they were candidates
+        step = self.shadow_step
+        cells = np.zeros_like(grid)
+        at = idx[shadow]
+        cells.reshape(-1)[(at // w // step) * grid.shape[1] + at % w // step] = 255
+        full = cv2.resize(cells, None, fx=step, fy=step, interpolation=cv2.INTER_NEAREST)
+        full = full[: fg.shape[0], : fg.shape[1]]
+        clear = cv2.bitwise_and(full, cand[: full.shape[0], : full.shape[1]])
+        cv2.bitwise_and(fg, cv2.bitwise_not(clear), dst=fg)
+
+    def _remove_ghosts(self, img: Image, fg: Image) -> None:
+        """Ghost blobs of ``fg`` reset to the frame and cleared: the test of
+        :func:`~mvtrack.detection.ghosts.ghost_blobs` (the outline's edges are the
+        background's, not the frame's), with the background's edges kept from the last
+        refresh and the frame's computed on the outline pixels only, over a band two pixels
+        wide across each blob's border."""
+        n, labels = cv2.connectedComponents(fg, connectivity=8, ltype=cv2.CV_32S)
+        if n <= 1:
+            return
+        # the outline as a band across the blob's border (the neighbourhood test of eq. (1)
+        # leaves a blob a pixel inside the object's edge), labelled by the nearest blob
+        outline = cv2.subtract(cv2.dilate(fg, None), cv2.erode(fg, None))
+        labels = cv2.dilate(labels.astype(np.float32), None).astype(np.int32)
+        pts = cv2.findNonZero(outline)
+        if pts is None:
+            return
+        w = fg.shape[1]
+        pts = pts.reshape(-1, 2)
+        idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
+        grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
+                                  cv2.BORDER_REPLICATE)
+        e_frame = _sobel_at(grey, idx + (idx // w) * 2 + (w + 2) + 1, w + 2)
+        e_back = self._mu_edges.reshape(-1)[idx]
+        lab = labels.reshape(-1)[idx]
+        s_frame = np.bincount(lab, e_frame, minlength=n)
+        s_back = np.bincount(lab, e_back, minlength=n)
+        ghost = (s_back > GHOST_RATIO * s_frame).astype(np.uint8) * np.uint8(255)
+        ghost[0] = 0
+        if not ghost.any():
+            return
+        sel = cv2.bitwise_and(ghost[labels], fg)
+        # reset to the frame with the ring the neighbourhood test left out of the blob
+        cv2.accumulateWeighted(img, self.mean, 1.0, mask=cv2.dilate(sel, None))
+        cv2.bitwise_and(fg, cv2.bitwise_not(sel), dst=fg)
+        cv2.bitwise_and(self._run, 0.0, dst=self._run, mask=sel)
+        self._stale = True
+
+    def rescale(self, size: tuple[int, int]) -> None:
+        """Resample the model to a working frame of ``size`` (W, H) (the front end changed
+        its working scale)."""
+        if self.mean is None:
+            return
+        mean = cv2.resize(self.mean, size, interpolation=cv2.INTER_AREA)
+        var = cv2.resize(self.var, size, interpolation=cv2.INTER_AREA)
+        run = cv2.resize(self._run, size, interpolation=cv2.INTER_NEAREST)
+        self.bootstrap(np.zeros((size[1], size[0], 3), np.uint8))
+        self.mean, self.var, self._run = mean, var, run
+
+
+def _sobel_at(grey_pad: Image, at: NDArray[np.intp], stride: int) -> NDArray[np.float64]:
+    """The 3×3 Sobel gradient magnitude of a grey image padded by one pixel (row length
+    ``stride``) at the flat indices ``at`` only (as :func:`cv2.Sobel` with ``ksize=3``)."""
+    g = grey_pad.reshape(-1).astype(np.float64)
+    p = {(dy, dx): g[at + dy * stride + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1)
+         if (dy, dx) != (0, 0)}
+    gx = (p[-1, 1] + 2 * p[0, 1] + p[1, 1]) - (p[-1, -1] + 2 * p[0, -1] + p[1, -1])
+    gy = (p[1, -1] + 2 * p[1, 0] + p[1, 1]) - (p[-1, -1] + 2 * p[-1, 0] + p[-1, 1])
+    return np.hypot(gx, gy)
+
+
+def _edges(grey: Image) -> NDArray[np.float32]:
+    """Sobel gradient magnitude (3×3) of a grey image, replicated border."""
+    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    return cv2.magnitude(gx, gy)
+
+
+def _window_stats(a: Image, b: Image | None, at: NDArray[np.intp], stride: int
+                  ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]]:
+    """Over the 3×3 window of the pixels at flat indices ``at`` of images padded by one pixel
+    (row length ``stride``), gathered at those pixels only: the standard deviations of ``a``
+    and ``b`` and their correlation (``b`` None: zeros for the last two)."""
+    fa = a.reshape(-1)
+    fb = None if b is None else b.reshape(-1)
+    n = at.size
+    sa, saa = np.zeros(n, np.float32), np.zeros(n, np.float32)
+    sb, sbb, sab = (np.zeros(n, np.float32) for _ in range(3))
+    for off in (-stride - 1, -stride, -stride + 1, -1, 0, 1, stride - 1, stride, stride + 1):
+        va = fa[at + off].astype(np.float32)  # the nine offsets, not the pixels
+        sa += va
+        saa += va * va
+        if fb is not None:
+            vb = fb[at + off].astype(np.float32)
+            sb += vb
+            sbb += vb * vb
+            sab += va * vb
+    ma = sa / 9.0
+    va = np.maximum(saa / 9.0 - ma * ma, 0.0)
+    if fb is None:
+        return np.sqrt(va), sb, sb
+    mb = sb / 9.0
+    vb = np.maximum(sbb / 9.0 - mb * mb, 0.0)
+    cov = sab / 9.0 - ma * mb
+    return np.sqrt(va), np.sqrt(vb), cov / np.sqrt(va * vb + 1e-3)
+
+
+def _bgr(frame: Image) -> Image:
+    if frame.dtype != np.uint8 or frame.ndim not in (2, 3):
+        raise ValueError(f"frame must be a uint8 image, got {frame.dtype} {frame.shape}")
+    if frame.ndim == 2:
+        return cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+    if frame.shape[2] == 1:
+        return cv2.cvtColor(frame[:, :, 0], cv2.COLOR_GRAY2BGR)
+    return frame

@@ -1,0 +1,464 @@
+"""The road-user front end on a rendered street: cars, a bus and people at several depths, a
+car that waits 20 s at a light and drives on; its parts (background, kinds, waists) and the
+masks ``mvtrack track --masks`` writes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import linear_sum_assignment
+
+from mvtrack.detection import make_detector
+from mvtrack.detection.colourbg import ColourBackground
+from mvtrack.detection.kinds import KindModel, robust_plane
+from mvtrack.detection.roadusers import RoadUserDetector
+from mvtrack.detection.waists import cut_at_waists, join_fragments
+from mvtrack.eval import iou_matrix
+from mvtrack.sim.dense import scene_from_dense
+from mvtrack.sim.render import render_frames
+from mvtrack.sim.scene import Scene
+
+FPS = 10.0
+SIZE = (480, 320)
+N_FRAMES = 420
+STOP = (140, 340)  # the waiting car stands still over these frames (20 s at 10 fps)
+
+
+def street(seed: int = 0) -> Scene:
+    """A street seen from above at an angle: objects lower in the picture are nearer and
+    larger (the scale grows linearly with the row, as on a ground plane). Cars and a bus in
+    two lanes each way, people on the two pavements, and one car that stops at a light."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(N_FRAMES, dtype=np.float64)
+
+    def scale(y: float) -> float:
+        return 0.45 + y / SIZE[1]  # 0.6 at the far pavement, 1.25 at the near one
+
+    objs: list[dict] = []
+    lanes = [(95.0, -1), (125.0, -1), (200.0, 1), (240.0, 1)]  # row, direction
+    for li, (y, d) in enumerate(lanes):  # cars one after another in each lane
+        s = scale(y)
+        for j in range(4):
+            start = 25.0 * j + 10.0 * li + rng.uniform(0, 5)
+            speed = s * rng.uniform(5.0, 7.0)
+            objs.append(dict(kind="vehicle", y=y, d=d, t0=start, v=speed, body=(36 * s, 16 * s)))
+    s = scale(125.0)
+    objs.append(dict(kind="vehicle", y=125.0, d=-1, t0=150.0, v=5.5 * s, body=(95 * s, 22 * s),
+                     bus=True))
+    for y, d in ((60.0, 1), (305.0, -1)):  # pavements
+        s = scale(y)
+        for j in range(3):
+            objs.append(dict(kind="person", y=y, d=d, t0=40.0 * j + rng.uniform(0, 10),
+                             v=1.4 * s, box=(10 * s, 26 * s)))
+    n = len(objs) + 1
+    xy = np.full((N_FRAMES, n, 2), np.nan)
+    wh = np.full((N_FRAMES, n, 2), np.nan)
+    hd = np.zeros((N_FRAMES, n))
+    for i, o in enumerate(objs):  # a couple of dozen objects
+        x = np.where(o["d"] > 0, -60.0, SIZE[0] + 60.0) + o["d"] * o["v"] * (t - o["t0"])
+        on = (t >= o["t0"]) & (x > -80) & (x < SIZE[0] + 80)
+        xy[on, i] = np.column_stack([x[on], np.full(on.sum(), o["y"])])
+        size = o["body"] if o["kind"] == "vehicle" else o["box"]
+        wh[on, i] = size
+        hd[:, i] = 0.0 if o["d"] > 0 else np.pi
+    # the car that waits: drives in along a lane of its own, stops 20 s, drives on
+    y, s = 268.0, scale(268.0)
+    stop_x = 250.0
+    x = np.empty(N_FRAMES)
+    v = 6.0 * s
+    x[: STOP[0]] = stop_x - v * (STOP[0] - t[: STOP[0]])
+    x[STOP[0] : STOP[1]] = stop_x
+    x[STOP[1] :] = stop_x + v * (t[STOP[1] :] - STOP[1])
+    on = (x > -80) & (x < SIZE[0] + 80)
+    xy[on, n - 1] = np.column_stack([x[on], np.full(on.sum(), y)])
+    wh[on, n - 1] = (36 * s, 16 * s)
+    kinds = [o["kind"] for o in objs] + ["vehicle"]
+    body = np.array([o.get("body", o.get("box")) for o in objs] + [(36 * s, 16 * s)], float)
+    colours = np.array([[40, 40, 200], [200, 160, 40], [230, 230, 230], [30, 30, 30],
+                        [60, 150, 60], [20, 200, 230]], np.uint8)
+    colour = colours[rng.integers(0, len(colours), n)]
+    for i, o in enumerate(objs):
+        if o.get("bus"):
+            colour[i] = (30, 190, 230)
+        if o["kind"] == "person":
+            colour[i] = (60, 40, 150)
+    colour2 = np.where(colour.astype(int).sum(axis=1, keepdims=True) > 380, 60, 170).astype(
+        np.uint8).repeat(3, axis=1)
+    return scene_from_dense(
+        "street", FPS, SIZE, xy, wh, hd, category=["bus" if o.get("bus") else o["kind"]
+                                                   for o in objs] + ["waits"],
+        kind=kinds, body=body, rotates=np.zeros(n, bool), color=colour, color2=colour2,
+        meta={})
+
+
+@pytest.fixture(scope="module")
+def rendered() -> tuple[Scene, list[np.ndarray]]:
+    scene = street()
+    return scene, list(render_frames(scene, seed=1))
+
+
+def _isolated(tlwh: np.ndarray, margin: float = 4.0) -> np.ndarray:
+    lo, hi = tlwh[:, :2] - margin, tlwh[:, :2] + tlwh[:, 2:] + margin
+    apart = (np.minimum(hi[:, None], hi[None]) - np.maximum(lo[:, None], lo[None]) <= 0).any(2)
+    np.fill_diagonal(apart, True)
+    return apart.all(axis=1)
+
+
+def test_every_road_user_gets_one_box_of_its_own_shape(rendered) -> None:
+    """Cars, the bus and the people, near and far, each get one box that matches them (IoU
+    at least 0.5, no second box on them) of their own shape: the people's tall, the cars'
+    wide, the bus's longer than a car's — nothing is completed to a person's height, no bus
+    is cut into cars."""
+    scene, frames = rendered
+    det = RoadUserDetector()
+    frames_in = det.prepare(iter(frames))
+    ok = {"person": [], "vehicle": [], "bus": []}
+    for k, frame in enumerate(frames_in):
+        dets = det(frame)
+        if k < 60:  # the kinds are being learnt
+            continue
+        rows = scene.rows(k)
+        gt = np.column_stack([scene.xy[rows] - scene.wh[rows] / 2, scene.wh[rows]])
+        inside = (gt[:, 0] > 2) & (gt[:, 1] > 2) & (gt[:, 0] + gt[:, 2] < SIZE[0] - 2)
+        alone = _isolated(gt) & inside
+        cat = scene.category[scene.id[rows] - 1]
+        kind = np.where(cat == "bus", "bus", scene.kind[scene.id[rows] - 1])
+        if not alone.any():
+            continue
+        boxes = dets.tlwh
+        iou = iou_matrix(gt, boxes) if len(boxes) else np.zeros((len(gt), 0))
+        for i in np.flatnonzero(alone):
+            hits = np.flatnonzero(iou[i] >= 0.5) if iou.shape[1] else np.zeros(0, int)
+            near = np.flatnonzero(iou[i] > 0.1) if iou.shape[1] else np.zeros(0, int)
+            good = len(hits) == 1 and len(near) == 1
+            if good:
+                b = boxes[hits[0]]
+                aspect = np.log((b[2] / b[3]) / (gt[i, 2] / gt[i, 3]))
+                good = abs(aspect) < np.log(1.4)
+            ok[kind[i]].append(good)
+    for kind, got in ok.items():
+        assert len(got) >= 20, (kind, len(got))
+        assert np.mean(got) >= 0.85, (kind, np.mean(got), len(got))
+
+
+def test_a_car_that_waits_keeps_its_id_and_leaves_no_box_behind(rendered, tmp_path) -> None:
+    """The car that stops for 20 s and drives on, through the whole pipeline of ``mvtrack
+    track`` (default front end, tracker, templates, relinking): one ID over its visible
+    frames, while it waits too; once it has gone, no box is left where it stood."""
+    from mvtrack.config import RunSettings
+    from mvtrack.video.build import build_detector, build_tracker
+    from mvtrack.video.run import track_to_folder
+    from mvtrack.video.settings import resolve_settings
+
+    scene, frames = rendered
+    settings = resolve_settings(RunSettings(video=False), SIZE, FPS)
+    assert settings.detector == "road-users"
+    det, tracker = build_detector(settings), build_tracker(settings, FPS)
+    track_to_folder(iter(frames), fps=FPS, size=SIZE, settings=settings, out=tmp_path,
+                    parts=(det, tracker), progress=False)
+    rows = np.loadtxt(tmp_path / "results.txt", delimiter=",", ndmin=2)
+    car = scene.n_objects
+    ids, stood = [], None
+    for k in range(N_FRAMES):
+        sel = scene.rows(k)
+        mine = np.flatnonzero(scene.id[sel] == car)
+        if not mine.size:
+            continue
+        g = np.concatenate([scene.xy[sel][mine] - scene.wh[sel][mine] / 2,
+                            scene.wh[sel][mine]], axis=1)
+        if not ((g[0, 0] > 0) and (g[0, 0] + g[0, 2] < SIZE[0])):
+            continue
+        if k == STOP[0] + 10:
+            stood = g[0]
+        r = rows[rows[:, 0] == k + 1]
+        if len(r):
+            iou = iou_matrix(g, r[:, 2:6])[0]
+            j = int(iou.argmax())
+            ids.append(int(r[j, 1]) if iou[j] >= 0.5 else 0)
+        else:
+            ids.append(0)
+    ids = np.array(ids)
+    assert (ids > 0).mean() >= 0.9, (ids > 0).mean()
+    main = np.bincount(ids[ids > 0]).argmax()
+    assert (ids == main).mean() >= 0.9, np.unique(ids, return_counts=True)
+    # after it has left the place where it stood (1 s on), nothing stays there
+    after = rows[rows[:, 0] > STOP[1] + FPS + 1]
+    assert stood is not None
+    if len(after):
+        assert iou_matrix(stood[None], after[:, 2:6]).max() < 0.3
+
+
+def test_the_mask_writer_writes_the_front_ends_masks(rendered, tmp_path) -> None:
+    """``--masks DIR``: one 0/255 PNG a frame, equal to the front end's mask of that frame
+    (the detector's :attr:`mask`, at the input size)."""
+    from mvtrack.config import RunSettings
+    from mvtrack.io.masks import mask_path, read_mask
+    from mvtrack.video.build import build_detector, build_tracker
+    from mvtrack.video.run import track_to_folder
+    from mvtrack.video.settings import resolve_settings
+
+    _, frames = rendered
+    frames = frames[:40]
+    settings = resolve_settings(RunSettings(video=False), SIZE, FPS)
+    det, tracker = build_detector(settings), build_tracker(settings, FPS)
+    seen = []
+
+    class Spy:  # the front end as the loop sees it, its mask kept after each frame
+        def __getattr__(self, name):
+            return getattr(det, name)
+
+        def __call__(self, frame):
+            out = det(frame)
+            seen.append(None if det.mask is None else det.mask.copy())
+            return out
+
+    run = track_to_folder(iter(frames), fps=FPS, size=SIZE, settings=settings,
+                          out=tmp_path / "out", parts=(Spy(), tracker), progress=False,
+                          masks=tmp_path / "masks")
+    assert run.summary["masks"]["written"] == len(frames)
+    assert sorted(p.name for p in (tmp_path / "masks").iterdir()) == [
+        f"{k:06d}.png" for k in range(1, len(frames) + 1)]
+    moving = 0
+    for k, want in enumerate(seen):
+        got = read_mask(mask_path(tmp_path / "masks", k))
+        assert got.dtype == np.uint8 and got.shape == (SIZE[1], SIZE[0])
+        assert set(np.unique(got)) <= {0, 255}
+        expect = np.zeros_like(got) if want is None else np.where(want > 0, 255, 0)
+        np.testing.assert_array_equal(got, expect)
+        moving += int(got.any())
+    assert moving >= 10  # cars and people on the street
+
+
+def test_masks_need_a_front_end_with_a_mask(tmp_path) -> None:
+    from mvtrack.errors import InputError
+    from mvtrack.video.run import _mask_writer
+
+    class NoMask:
+        name = "boxes-only"
+
+    with pytest.raises(InputError, match="no foreground mask"):
+        _mask_writer(tmp_path / "m", NoMask())
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InputError, match="cannot create"):
+        _mask_writer(tmp_path / "file" / "m", RoadUserDetector())
+
+
+# --------------------------------------------------------------------------- the parts
+
+
+def test_kind_model_recovers_kinds_and_the_scale_law() -> None:
+    """Samples of two kinds on a ground plane, S = 10 + 0.02 x + 0.05 y, with 5 % noise and
+    a few merged pairs: the kinds' sizes and the law come back."""
+    rng = np.random.default_rng(3)
+    n = 600
+    x, y = rng.uniform(0, 640, n), rng.uniform(100, 480, n)
+    s = 10 + 0.02 * x + 0.05 * y
+    car = rng.random(n) < 0.7
+    size = np.where(car[:, None], [3.5, 1.6], [0.9, 2.4]) * s[:, None]
+    size *= np.exp(rng.normal(0, 0.05, (n, 2)))
+    merged = rng.random(n) < 0.05  # two cars end to end
+    size[merged & car, 0] *= 2
+    tlwh = np.column_stack([x - size[:, 0] / 2, y - size[:, 1], size])
+    m = KindModel(min_samples=30)
+    m.update(tlwh)
+    assert m.ready and len(m.sizes) >= 2
+    # the law up to the kinds' common factor: compare ratios of S at two points
+    s_model = m.scale(np.array([100.0, 500.0]), np.array([150.0, 450.0]))
+    s_true = 10 + 0.02 * np.array([100.0, 500.0]) + 0.05 * np.array([150.0, 450.0])
+    assert s_model[1] / s_model[0] == pytest.approx(s_true[1] / s_true[0], rel=0.05)
+    exp = m.expected(np.array([[290.0, 300.0, 10.0, 10.0]]))[0]  # bottom centre (295, 310)
+    truth = (10 + 0.02 * 295 + 0.05 * 310) * np.array([[3.5, 1.6], [0.9, 2.4]])
+    for t in truth:  # each true kind is one of the learnt ones, within 10 %
+        assert np.min(np.abs(np.log(exp / t)).max(axis=1)) < 0.1, (exp, t)
+    s0 = 10 + 0.02 * 300 + 0.05 * 300  # two cars end to end, bottom centre at (300, 300)
+    w, h = 2 * 3.5 * s0, 1.6 * s0
+    kind, parts, z = m.match(np.array([[300 - w / 2, 300 - h, w, h], [300 - w / 4, 300 - h,
+                                                                      w / 2, h]]))
+    assert tuple(parts[0]) == (2, 1) and tuple(parts[1]) == (1, 1)
+    assert kind[0] == kind[1] and z[1] < 1.5
+
+
+def test_robust_plane_is_least_squares_without_outliers_and_ignores_them() -> None:
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(0, 100, 200), rng.uniform(0, 50, 200)
+    z = 3 + 0.5 * x - 0.2 * y
+    np.testing.assert_allclose(robust_plane(x, y, z, ridge=0.0), [3, 0.5, -0.2], atol=1e-9)
+    z2 = z.copy()
+    z2[:20] += 100.0
+    np.testing.assert_allclose(robust_plane(x, y, z2, ridge=0.0), [3, 0.5, -0.2], atol=1e-6)
+
+
+def _labels(*rects: tuple[int, int, int, int], shape=(60, 120)) -> np.ndarray:
+    import cv2
+
+    mask = np.zeros(shape, np.uint8)
+    for x, y, w, h in rects:
+        mask[y : y + h, x : x + w] = 255
+    return cv2.connectedComponents(mask)[1]
+
+
+def test_two_cars_joined_at_a_bridge_are_cut_a_bus_is_not() -> None:
+    # two 30×14 cars end to end, joined by a 2-pixel bridge; a 64×14 bus below
+    lab = _labels((5, 5, 30, 14), (35, 11, 3, 2), (38, 5, 30, 14), (5, 35, 64, 14))
+    one = np.array([[30.0, 14.0], [30.0, 14.0]])
+    boxes = np.array([[4.5, 4.5, 63.0, 14.0], [4.5, 34.5, 64.0, 14.0]])
+    got, src = cut_at_waists(lab, np.array([lab[10, 10], lab[40, 10]]), boxes, one)
+    cars = got[src == 0]
+    assert len(cars) == 2
+    # cut inside the bridge (columns 35–37): the right car starts there
+    assert cars[:, 0].min() == 4.5 and 34.5 <= cars[:, 0].max() <= 37.5
+    assert len(got[src == 1]) == 1  # the bus has no waist
+    np.testing.assert_allclose(got[src == 1][0], boxes[1])
+
+
+def test_two_walkers_side_by_side_are_cut_between_their_heads() -> None:
+    # two walkers 10 wide and 30 tall whose legs touch: the count profile barely dips, the
+    # upper envelope does (heads apart)
+    lab = _labels((10, 10, 8, 30), (19, 10, 8, 30), (17, 25, 3, 15))
+    boxes = np.array([[9.5, 9.5, 17.0, 30.0]])
+    got, _ = cut_at_waists(lab, np.array([lab[20, 12]]), boxes, np.array([[9.0, 30.0]]),
+                           valley=0.6)
+    assert len(got) == 2
+
+
+def test_fragments_of_one_object_are_joined() -> None:
+    m = KindModel(min_samples=30)
+    rng = np.random.default_rng(1)
+    x = rng.uniform(50, 600, 200)
+    y = rng.uniform(100, 400, 200)
+    m.update(np.column_stack([x - 15, y - 12, np.full(200, 30.0), np.full(200, 12.0)]))
+    assert m.ready
+    # a car broken at its windscreen: 14 + 13 wide with a 3-pixel gap; another car 40 px away
+    boxes = np.array([[100.0, 188.0, 14.0, 12.0], [117.0, 188.0, 13.0, 12.0],
+                      [170.0, 188.0, 30.0, 12.0]])
+    got, group = join_fragments(boxes, m)
+    assert len(got) == 2 and group[0] == group[1] != group[2]
+    np.testing.assert_allclose(got[group[0]], [100.0, 188.0, 30.0, 12.0])
+
+
+def test_a_stopped_object_stays_foreground_and_is_absorbed_when_it_parks() -> None:
+    """The selective update: an object that stops stays foreground (no fading), is absorbed
+    after ``absorb_after`` frames (within the ``refresh`` frames between two counts); once it
+    leaves, no ghost is left."""
+    rng = np.random.default_rng(0)
+    bg = np.full((40, 60, 3), 100, np.uint8)
+
+    def frame(obj: bool) -> np.ndarray:
+        f = np.clip(bg + rng.normal(0, 2, bg.shape), 0, 255).astype(np.uint8)
+        if obj:
+            f[10:20, 20:35] = (30, 60, 200)
+        return f
+
+    model = ColourBackground(absorb_after=50, ghost_every=0)
+    model.bootstrap(bg)
+    for _ in range(45):
+        fg = model.apply(frame(True))
+    assert fg[10:20, 20:35].mean() > 250  # still whole after 45 frames
+    for _ in range(5 + model.refresh):
+        fg = model.apply(frame(True))
+    assert fg[10:20, 20:35].mean() < 5  # absorbed at 50 (+ up to refresh)
+    model = ColourBackground(absorb_after=500, ghost_every=0)
+    model.bootstrap(bg)
+    for _ in range(100):
+        model.apply(frame(True))
+    fg = model.apply(frame(False))
+    assert fg.mean() < 1  # it drove off: the road under it was never learnt away
+
+
+def test_held_pixels_are_not_learnt() -> None:
+    bg = np.full((20, 20, 3), 100, np.uint8)
+    model = ColourBackground(ghost_every=0, jitter=0)
+    model.bootstrap(bg)
+    held = np.zeros((20, 20), np.uint8)
+    held[5:15, 5:15] = 255
+    faint = bg.copy()
+    faint[5:15, 5:15] = 108  # below the threshold: background, but held
+    for _ in range(100):
+        model.apply(faint, held)
+    assert np.allclose(model.mean[5:15, 5:15], 100.0)
+    assert np.allclose(model.mean[0:4, 0:4], 100.0, atol=0.5)
+
+
+def test_shadows_are_left_out_dark_objects_are_not() -> None:
+    """On a flat road, a patch darkened by a common factor (a shadow) is not foreground; a
+    dark patch with texture of its own (a dark car with windows) is."""
+    rng = np.random.default_rng(2)
+    bg = np.full((60, 80, 3), (110, 120, 125), np.uint8)
+    model = ColourBackground(ghost_every=0)
+    model.bootstrap(bg)
+    f = bg.copy()
+    f[10:30, 5:35] = (bg[10:30, 5:35] * 0.55).astype(np.uint8)  # shadow
+    car = (bg[10:30, 45:75] * 0.5).astype(np.uint8)
+    car[::3] = 20
+    car[:, ::4] = 150
+    f[10:30, 45:75] = car  # dark, with edges of its own
+    f = np.clip(f + rng.normal(0, 1, f.shape), 0, 255).astype(np.uint8)
+    fg = model.apply(f)
+    assert (fg[12:28, 7:33] > 0).mean() < 0.1
+    assert (fg[12:28, 47:73] > 0).mean() > 0.6
+
+
+def test_bad_parameters_are_refused_in_one_line() -> None:
+    for kwargs, word in (({"scale": 0}, "scale"), ({"bootstrap": "all"}, "bootstrap"),
+                         ({"valley": 2.0}, "valley"), ({"close_size": -1}, "close_size"),
+                         ({"alpha": 2.0}, "alpha"), ({"absorb_after": -3}, "absorb_after")):
+        with pytest.raises(ValueError, match=word):
+            make_detector("road-users", **kwargs)
+    with pytest.raises(ValueError, match="unknown parameter"):
+        make_detector("road-users", threshold=20)
+    with pytest.raises(ValueError, match="uint8"):
+        RoadUserDetector()(np.zeros((10, 10), np.float32))
+
+
+def test_boxes_match_the_blobs_at_full_scale_and_reduced() -> None:
+    """A filled rectangle on a flat background gives its own bounding box, at scale 1 and at
+    scale 0.5 (boxes come back in the input's pixels)."""
+    bg = np.full((120, 160, 3), 90, np.uint8)
+    f = bg.copy()
+    f[40:60, 50:90] = (20, 200, 240)
+    for scale in (1.0, 0.5):
+        det = RoadUserDetector(scale=scale, bootstrap="none", learn=False)
+        det(bg)
+        d = det(f)
+        assert len(d) == 1
+        tol = 0.01 if scale == 1.0 else 2.0
+        np.testing.assert_allclose(d.tlwh[0], [49.5, 39.5, 40.0, 20.0], atol=tol)
+        assert det.mask.shape == (120, 160)
+
+
+def test_one_box_per_object_against_truth_matching() -> None:
+    """The Hungarian matching used above pairs each object with at most one box (a check of
+    the helper, against a hand count)."""
+    gt = np.array([[0, 0, 10, 10], [20, 0, 10, 10]], float)
+    boxes = np.array([[0, 0, 10, 10], [1, 1, 10, 10], [20, 0, 10, 10]], float)
+    iou = iou_matrix(gt, boxes)
+    r, c = linear_sum_assignment(-iou)
+    assert (iou[r, c] >= 0.5).sum() == 2
+    assert (iou[0] > 0.1).sum() == 2  # the second box on object 0 counts as a split
+
+
+def test_sparse_sobel_equals_opencvs() -> None:
+    """The ghost test's gradient at the outline pixels only equals ``cv2.Sobel`` there."""
+    import cv2
+
+    from mvtrack.detection.colourbg import _edges, _sobel_at
+
+    g = np.random.default_rng(4).integers(0, 256, (30, 40), dtype=np.uint8)
+    pad = cv2.copyMakeBorder(g, 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+    idx = np.arange(30 * 40)
+    got = _sobel_at(pad, idx + (idx // 40) * 2 + 42 + 1, 42)
+    np.testing.assert_allclose(got, _edges(g).reshape(-1), rtol=1e-5, atol=1e-3)
+
+
+def test_ghost_of_the_first_frames_is_reset() -> None:
+    """An object in the bootstrap background that has left is a ghost: its outline has the
+    background's edges and none of the frame's; it is reset within ``ghost_every`` frames."""
+    bg = np.full((40, 60, 3), 100, np.uint8)
+    with_car = bg.copy()
+    with_car[10:20, 20:35] = (30, 40, 60)  # a dark car (the test reads grey-level edges)
+    model = ColourBackground(ghost_every=2)
+    model.bootstrap(with_car)  # the car stood in the first frames, then drove off
+    masks = [model.apply(bg).copy() for _ in range(3)]
+    assert masks[0][11:19, 21:34].mean() > 250  # the ghost, before the test
+    assert masks[-1].max() == 0  # reset
+    assert np.allclose(model.mean[10:20, 20:35], 100.0)
