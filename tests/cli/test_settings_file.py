@@ -151,7 +151,8 @@ def test_a_bad_value_names_the_file_and_the_key(tmp_path: Path, capsys, case: st
 
 def test_none_reads_as_none_in_the_front_ends_table(tmp_path: Path) -> None:
     cfg = tmp_path / "c.toml"
-    cfg.write_text('[detector]\nverify = "none"\ncomplete = "none"\n')
+    # parameters of the scene front end (the default is the road-user front end)
+    cfg.write_text('[detector]\nname = "scene"\nverify = "none"\ncomplete = "none"\n')
     assert load_config(cfg).detector_params == {"verify": None, "complete": None}
 
 
