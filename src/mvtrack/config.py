@@ -38,7 +38,7 @@ With an ``[analytics]`` table, ``mvtrack track`` also writes ``counts.csv``, ``m
 
 An unknown table or key, or a value of the wrong type or out of range, is an
 :class:`~mvtrack.errors.InputError` of one line naming the file and the key (``scene.toml:
-tracker.max_coast must be ...``), so a misspelt setting never passes silently. Tracker keys are
+tracker.max_misses must be ...``), so a misspelt setting never passes silently. Tracker keys are
 checked against ``TrackerConfig``'s fields and by building the tracker once; detector and
 template keys against the parameters (and their annotated types) of the front end's and the
 template bank's constructors.
@@ -163,8 +163,9 @@ class RunSettings:
         Whether and how a new track continues one that ended behind an occluder
         (:mod:`mvtrack.video.relink`).
     coasting : bool
-        Also write the rows of coasting tracks (no detection, up to the tracker's
-        ``coast_output``) to ``results.txt``: ``--coasting``, no key in the file.
+        Also write the rows of coasting tracks (no detection, while the tracker's prediction
+        is within ``coast_std`` box sizes) to ``results.txt``: ``--coasting``, no key in the
+        file.
     """
 
     tracker: dict[str, Any] = field(default_factory=dict)

@@ -51,8 +51,11 @@ def toml_value(value: Any) -> str:
 
 
 def _plain(text: str) -> str:
-    """numpydoc / reST markup as plain text."""
-    text = re.sub(r":\w+:`~?([^`]+)`", lambda m: m.group(1).rsplit(".", 1)[-1], text)
+    """numpydoc / reST markup as plain text: a module by its full name, anything else by its
+    own (``:mod:`mvtrack.association.gate``` is mvtrack.association.gate, ``:func:`~a.b``` b)."""
+    text = re.sub(r":(\w+):`~?([^`]+)`",
+                  lambda m: m.group(2) if m.group(1) == "mod" else m.group(2).rsplit(".", 1)[-1],
+                  text)
     return text.replace("``", "")
 
 
@@ -188,9 +191,6 @@ def default_toml(preset: str = "default", detector: str | None = None) -> str:
         text = f"{f.name} = {toml_value(value)}"
         if f.name == "fps":
             lines.append(f"# {text}  (the source's frame rate unless given here or by --fps)")
-        elif isinstance(value, int) and type(value) not in (int, bool):  # Frames(n)
-            lines.append(f"# {f.name}: {value} (the preset's rule counts frames at any frame "
-                         "rate); a number here is seconds")
         elif any(f.name in t for t in tracker_video):
             lines.append(f"# {f.name} = {toml_value(tracker_video[0].get(f.name, value))}")
             lines.extend(_comment(_per_video(f.name, tracker_video)

@@ -117,7 +117,9 @@ class DistanceChoice(Choice):
 CHI2_2DOF_99 = 9.21
 
 #: association distances (:data:`mvtrack.association.DISTANCES`) and their default gates; the
-#: Euclidean one, 100 px² (a 10 px circle), is the tracker's default (docs/bench/tracker.md)
+#: tracker's default is ``mahalanobis`` at 9.21 (99 % of a χ² with 2 degrees of freedom on the
+#: filter's innovation covariance, :mod:`mvtrack.association.gate`); the Euclidean 100 px² (a
+#: 10 px circle) is paper 1's synthetic experiment's (its real videos use 20 px, ``paper1``)
 DISTANCES: dict[str, DistanceChoice] = {
     "euclidean": DistanceChoice(
         "squared centre distance (papers 1 and 2)", gate=100.0, unit="px²"

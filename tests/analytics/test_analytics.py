@@ -186,13 +186,19 @@ def test_queue_scene_rendered_and_tracked_keeps_the_queued_ids_and_counts_exactl
     and the default tracker: every queued vehicle keeps its ID and the movements and stop-line
     crossings counted on the tracks are exact. Without ``hold`` 2, 2 and 3 of the 8 queued
     vehicles keep one ID (bench_queue.py)."""
-    from mvtrack.experiments._video import default_config, pipeline_blob_params, track_scene
+    from mvtrack.experiments._video import (
+        default_config,
+        default_frame_size,
+        pipeline_blob_params,
+        track_scene,
+    )
     from mvtrack.sim.queue import queue_scene, queue_settings
 
     sc = queue_scene(seed)
     params = pipeline_blob_params(sc.size, sc.fps)
     assert params["hold"] == 60 * 30
-    run = track_scene(sc, default_config(sc), seed=seed, detector_params=params)
+    run = track_scene(sc, default_config(sc), seed=seed, detector_params=params,
+                      frame_size=default_frame_size(sc))
     queued = [i + 1 for i, c in enumerate(sc.category) if c == "queue"]
     kept = 0
     for v in queued:

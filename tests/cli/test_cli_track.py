@@ -253,19 +253,20 @@ def test_none_in_the_tracker_table_unsets_a_field(tmp_path) -> None:
     """TOML has no null: ``"none"`` stands for ``None``; a field that cannot be None says so."""
     from mvtrack.video import build_tracker_config
 
-    cfg = build_tracker_config(RunSettings(tracker={"second_gate": "none",
-                                                    "low_birth_iou": "None"}), fps=10.0)
-    assert cfg.second_gate is None and cfg.low_birth_iou is None
-    assert build_tracker_config(RunSettings(), fps=10.0).second_gate == 20.0
+    cfg = build_tracker_config(RunSettings(tracker={"size_noise": "none",
+                                                    "birth_iou": "None"}), fps=10.0)
+    assert cfg.size_noise is None and cfg.birth_iou is None
+    default = build_tracker_config(RunSettings(), fps=10.0)
+    assert default.size_noise == 0.25 and default.birth_iou == 0.3
     with pytest.raises(InputError, match="fps"):
         build_tracker_config(RunSettings(tracker={"fps": "none"}), fps=10.0)
     config = tmp_path / "c.toml"
-    config.write_text('[tracker]\nrecover_speed = "none"\n')
+    config.write_text('[tracker]\nlost_std = "none"\n')
     video = _write_avi(tmp_path / "v.avi")
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out), "--config", str(config),
                  "--no-video", "--max-frames", "5"]) == 0
-    assert json.loads((out / "summary.json").read_text())["tracker"]["recover_speed"] is None
+    assert json.loads((out / "summary.json").read_text())["tracker"]["lost_std"] is None
 
 
 def test_changing_the_distance_resets_the_gate() -> None:
@@ -280,13 +281,18 @@ def test_changing_the_distance_resets_the_gate() -> None:
 
 
 def test_naming_the_presets_own_distance_changes_nothing() -> None:
-    """``--distance euclidean`` (the default distance, named) keeps the default's 10 px gate."""
+    """``--distance mahalanobis`` (the default distance, named) keeps the default's χ² gate;
+    ``--distance euclidean`` on ``paper1`` keeps its 20 px circle."""
     from mvtrack.association import resolve_gate
     from mvtrack.tracking import preset
     from mvtrack.video import build_tracker_config
 
-    named = build_tracker_config(RunSettings(tracker={"distance": "euclidean"}), 30.0)
+    named = build_tracker_config(RunSettings(tracker={"distance": "mahalanobis"}), 30.0)
     assert named == build_tracker_config(RunSettings(), 30.0)
-    assert resolve_gate(named.distance, named.gate) == 100.0
-    assert preset("default", fps=30.0, distance="euclidean") == preset("default", fps=30.0)
+    assert resolve_gate(named.distance, named.gate) == 9.21
+    assert preset("default", fps=30.0, distance="mahalanobis") == preset("default", fps=30.0)
+    paper = build_tracker_config(RunSettings(tracker={"preset": "paper1",
+                                                      "distance": "euclidean"}), 30.0)
+    assert paper == preset("paper1", fps=30.0) and paper.gate == 400.0  # 20 px
+    assert preset("default", fps=30.0, distance="euclidean").gate is None  # its own: 10 px
     assert preset("default", fps=30.0, distance="iou").gate is None  # another distance: its own

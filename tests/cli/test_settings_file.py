@@ -87,6 +87,8 @@ def test_the_printed_defaults_follow_the_tracker_config(capsys) -> None:
     for f in dataclasses.fields(TrackerConfig):
         assert f"\n{f.name} = " in tracker or f"\n# {f.name} = " in tracker, f.name
     assert "\n# fps = " in tracker  # the source's unless given
+    # a module named in a description keeps its full name (not "the gate (gate)")
+    assert "(mvtrack.association.gate)" in tracker and "(gate)" not in tracker
 
 
 def test_config_check_and_usage(tmp_path: Path, capsys) -> None:
@@ -95,9 +97,12 @@ def test_config_check_and_usage(tmp_path: Path, capsys) -> None:
     assert main(["config", "--check", str(f)]) == 0
     out = capsys.readouterr().out
     assert out.startswith(f"{f}: valid") and "predictor = 'rls'" in out
-    f.write_text("[tracker]\nmax_coast = -1\n")
+    f.write_text("[tracker]\nmax_misses = -1\n")
     assert main(["config", "--check", str(f)]) == 2
-    assert f"{f}: tracker.max_coast must be" in _err(capsys)
+    assert f"{f}: tracker.max_misses must be a whole number of frames" in _err(capsys)
+    f.write_text("[tracker]\nmax_coast = 0.3\n")  # a setting of the engine before max_misses
+    assert main(["config", "--check", str(f)]) == 2
+    assert f"{f}: unknown key 'tracker.max_coast'" in _err(capsys)
     assert main(["config"]) == 2
     assert "--show" in _err(capsys)
     assert main(["config", "--show", "--preset", "paper9"]) == 2
@@ -105,7 +110,9 @@ def test_config_check_and_usage(tmp_path: Path, capsys) -> None:
 
 
 BAD_TOML = {
-    "negative max_coast": ("[tracker]\nmax_coast = -1\n", "tracker.max_coast must be"),
+    "negative max_misses": ("[tracker]\nmax_misses = -1\n", "tracker.max_misses must be"),
+    "negative lost_std": ("[tracker]\nlost_std = -0.3\n", "tracker.lost_std must be"),
+    "removed field": ("[tracker]\nsecond_gate = 20.0\n", "unknown key 'tracker.second_gate'"),
     "string confirm_hits": ('[tracker]\nconfirm_hits = "x"\n', "tracker.confirm_hits must be"),
     "unknown predictor": ('[tracker]\npredictor = "psychic"\n',
                           "tracker.predictor 'psychic' is not a predictor"),
@@ -144,7 +151,8 @@ def test_a_bad_value_names_the_file_and_the_key(tmp_path: Path, capsys, case: st
 
 def test_none_reads_as_none_in_the_front_ends_table(tmp_path: Path) -> None:
     cfg = tmp_path / "c.toml"
-    cfg.write_text('[detector]\nverify = "none"\ncomplete = "none"\n')
+    # parameters of the scene front end (the default is the road-user front end)
+    cfg.write_text('[detector]\nname = "scene"\nverify = "none"\ncomplete = "none"\n')
     assert load_config(cfg).detector_params == {"verify": None, "complete": None}
 
 
@@ -224,9 +232,9 @@ def test_track_detections_reads_the_tracker_table(tmp_path: Path, capsys) -> Non
     assert main(["track-detections", str(det), "--out", str(out), "--config", str(cfg),
                  "--fps", "25", "--predictor", "rls"]) == 0
     assert "(rls, euclidean, nearest, 25 fps;" in capsys.readouterr().out
-    cfg.write_text("[tracker]\nmax_coast = -1\n")
+    cfg.write_text("[tracker]\nmax_misses = -1\n")
     assert main(["track-detections", str(det), "--out", str(out), "--config", str(cfg)]) == 2
-    assert f"{cfg}: tracker.max_coast must be" in _err(capsys)
+    assert f"{cfg}: tracker.max_misses must be" in _err(capsys)
 
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"

@@ -36,7 +36,8 @@ def _write_avi(path: Path, n: int = 60) -> Path:
 
 def test_sigterm_in_track_writes_what_was_tracked_and_exits_143(tmp_path, capsys,
                                                                 monkeypatch) -> None:
-    """The signal arrives in the frame loop (sent by the process to itself at frame 26)."""
+    """The signal arrives in the frame loop (sent by the process to itself while frame 26 is
+    detected): that frame is finished and kept, and the run ends after it."""
     stop_at_frame(monkeypatch, 26, lambda: os.kill(os.getpid(), signal.SIGTERM))
     before = signal.getsignal(signal.SIGTERM)
     video = _write_avi(tmp_path / "v.avi")
@@ -44,13 +45,13 @@ def test_sigterm_in_track_writes_what_was_tracked_and_exits_143(tmp_path, capsys
     assert main(["track", str(video), "--out", str(out)]) == 143
     assert signal.getsignal(signal.SIGTERM) is before  # the handler is the command's only
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and err.startswith("error: terminated after 25 frames"), err
+    assert err.count("\n") == 0 and err.startswith("error: terminated after 26 frames"), err
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["frames"] == 25 and summary["interrupted"] and summary["ended_early"]
+    assert summary["frames"] == 26 and summary["interrupted"] and summary["ended_early"]
     rows = np.loadtxt(out / "results.txt", delimiter=",", ndmin=2)
-    assert len(rows) and rows[:, 0].max() <= 25 and rows.shape[1] == 10
+    assert len(rows) and rows[:, 0].max() <= 26 and rows.shape[1] == 10
     cap = cv2.VideoCapture(str(out / "tracks.mp4"))
-    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 25
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 26
     cap.release()
     assert not [p for p in out.iterdir() if p.name.startswith(".")]
 
@@ -71,7 +72,9 @@ def test_ctrl_c_still_exits_130_after_a_sigterm_in_an_earlier_command(tmp_path, 
     send["sig"] = signal.SIGINT
     assert main(["track", str(video), "--out", str(tmp_path / "b"), "--no-video"]) == 130
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[0].startswith("error: terminated after 9 frames"), err
+    # the signal ends the run after the frame it arrived in; a KeyboardInterrupt raised in
+    # the detector, before that frame is tracked
+    assert err[0].startswith("error: terminated after 10 frames"), err
     assert err[1].startswith("error: interrupted after 9 frames"), err
 
 
@@ -178,14 +181,14 @@ def test_a_signal_in_track_detections_writes_the_frames_tracked(tmp_path, capsys
                            for k in range(40)])
     real = tracking.track_detections
 
-    def signalling(frames, config):
+    def signalling(frames, config, **options):
         def frames_sending():
             for k, d in enumerate(frames):
                 if k == 10:
                     os.kill(os.getpid(), sig)
                 yield d
 
-        return real(frames_sending(), config)
+        return real(frames_sending(), config, **options)
 
     monkeypatch.setattr(tracking, "track_detections", signalling)
     before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))

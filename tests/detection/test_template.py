@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mvtrack.detection.template import TemplateBank
-from mvtrack.video.rescue import TemplateRescuer, gate_radius_of
+from mvtrack.video.rescue import TemplateRescuer, search_radii
 
 H, W = 120, 160
 VW, VH = 18, 12  # vehicle box
@@ -77,6 +77,14 @@ def test_rescue_searches_only_inside_the_circular_gate() -> None:
     found, xy, _ = bank.rescue(frame, [7], [pred], gate_radius=23)
     assert found[0]
     np.testing.assert_allclose(xy[0], _centre(moved), atol=0.01)
+    # a radius per track: the same search
+    bank.observe(_frame((10, 80), seed=1), [8], [_centre((10, 80))], [[VW, VH]])
+    two = _frame(moved, seed=2)
+    two[80 : 80 + VH, 40 : 40 + VW] = _vehicle()[:, :, None]  # 30 px off its prediction
+    for radii, want in (([23.0, 31.0], [True, True]), ([20.0, 31.0], [False, True]),
+                        ([23.0, 20.0], [True, False])):
+        found, _, _ = bank.rescue(two, [7, 8], [pred, _centre((10, 80))], gate_radius=radii)
+        assert found.tolist() == want, radii
 
 
 def test_only_the_tracks_with_templates_are_searched_and_order_is_kept() -> None:
@@ -282,7 +290,8 @@ def test_a_vehicle_that_stops_keeps_its_track_in_state_stopped() -> None:
     from mvtrack.types import TrackState
 
     rows, rescuer = _run(True)
-    assert rescuer is not None and rescuer.gate_radius == pytest.approx(20.0)
+    uids = rescuer.tracker.tracks.uid
+    assert uids.size and (rescuer.radii(uids) == pytest.approx(20.0))  # paper 1's circle
     tid = _vehicle_track(rows, 45, STOP_XY)
     states = []
     for r in rows:
@@ -308,14 +317,46 @@ def test_without_templates_the_stopped_vehicle_track_ends() -> None:
     assert not any((r.track_id == tid).any() for r in rows[130:150])
 
 
-def test_gate_radius_follows_a_euclidean_tracker_gate() -> None:
+def _tracked(config, misses: int = 0, n: int = 10):
+    """A tracker that followed two boxes (18×12 and 36×24) for ``n`` frames, then missed
+    them ``misses`` times."""
+    from mvtrack import tracking
+    from mvtrack.types import Detections
+
+    tracker = tracking.Tracker(config)
+    for k in range(n + misses):
+        xy = [[30.0 + 2 * k, 40.0], [100.0 - k, 80.0]] if k < n else np.zeros((0, 2))
+        tracker.step(Detections(k, xy, [[18.0, 12.0], [36.0, 24.0]][: len(xy)]))
+    return tracker
+
+
+def test_search_radius_is_each_tracks_gate() -> None:
+    """The search radius of a track is the farthest point of its gate region from the
+    centre: the radius of a Euclidean circle; for the default's innovation gate
+    ``sqrt(r² λ_max(S))``, wider for the larger box and growing while a track is missed."""
     from mvtrack import tracking
 
-    tracker = tracking.Tracker(tracking.paper1(fps=30, gate_px=10.0))
-    assert gate_radius_of(tracker, 20.0) == pytest.approx(10.0)
-    assert TemplateRescuer(TemplateBank(), tracker).gate_radius == pytest.approx(10.0)
-    assert TemplateRescuer(TemplateBank(), tracker, gate_radius=15).gate_radius == 15
-    assert gate_radius_of(None, 20.0) == 20.0
+    tracker = _tracked(tracking.paper1(fps=30, gate_px=10.0))
+    uids = tracker.tracks.uid
+    np.testing.assert_allclose(search_radii(tracker, uids, 20.0), 10.0)
+    assert TemplateRescuer(TemplateBank(), tracker).radii(uids) == pytest.approx(10.0)
+    assert TemplateRescuer(TemplateBank(), tracker, gate_radius=15).radii(uids) == \
+        pytest.approx(15.0)
+    assert search_radii(None, uids, 20.0) == pytest.approx(20.0)  # no tracker: the default
+    assert search_radii(tracker, [999], 20.0) == pytest.approx(20.0)  # no such track
+
+    seen = _tracked(tracking.TrackerConfig(fps=30.0))
+    g = seen.gates()
+    major = np.sqrt(g.r2 * np.linalg.eigvalsh(g.shape)[:, -1])  # λ_max, apart from the code
+    radii = search_radii(seen, g.uid[::-1], 20.0)
+    np.testing.assert_allclose(radii, major[::-1], rtol=1e-9)
+    small, large = search_radii(seen, g.uid, 20.0)
+    assert 1.5 < large / small < 2.5  # the box twice as large: about twice the radius
+    missed = _tracked(tracking.TrackerConfig(fps=30.0), misses=3)
+    assert (search_radii(missed, missed.tracks.uid, 20.0) > radii[::-1]).all()
+    # the IoU gate is no region about the prediction: the bank's own radius
+    iou = _tracked(tracking.TrackerConfig(fps=30.0, distance="iou"))
+    assert search_radii(iou, iou.tracks.uid, 20.0) == pytest.approx(20.0)
 
 
 @pytest.mark.parametrize(("th", "tw"), [(10, 18), (30, 20), (64, 40)])
@@ -339,9 +380,12 @@ def test_masked_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None
 def test_search_radius_is_capped_by_max_radius() -> None:
     from mvtrack import tracking
 
-    tracker = tracking.Tracker(tracking.paper1(fps=30, gate_px=20.0))
-    assert TemplateRescuer(TemplateBank(), tracker, max_radius=4).gate_radius == 4.0
-    assert TemplateRescuer(TemplateBank(), tracker, max_radius=50).gate_radius == 20.0
+    tracker = _tracked(tracking.paper1(fps=30, gate_px=20.0))
+    uids = tracker.tracks.uid
+    assert TemplateRescuer(TemplateBank(), tracker, max_radius=4).radii(uids) == \
+        pytest.approx(4.0)
+    assert TemplateRescuer(TemplateBank(), tracker, max_radius=50).radii(uids) == \
+        pytest.approx(20.0)
     with pytest.raises(ValueError, match="max_radius"):
         TemplateRescuer(TemplateBank(), tracker, max_radius=-1)
     # a vehicle 6 px from the search centre is found with a 20 px radius, not with 4 px

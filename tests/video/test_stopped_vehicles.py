@@ -80,9 +80,12 @@ def test_states_csv_gives_each_stopped_row_its_template_score(tmp_path) -> None:
     standing = (motion == "stopped") & (state == "confirmed")
     assert standing.sum() >= 300  # the two waits, ~7.5 s each at 30 fps
     ids = np.array(held["id"]).astype(int)
-    # the two waiting vehicles; another track may read 0 on the row where it is confirmed
-    # (the filter's velocity is still its prior there)
-    assert np.isin(ids[standing], [1, 3]).sum() >= 300
-    assert (~np.isin(ids[standing], [1, 3])).sum() <= 3
+    # the two waiting vehicles are the two tracks that stand longest, each most of its wait;
+    # another track may read 0 on its first rows (the filter's velocity is still its prior
+    # there), never longer
+    tracks, rows = np.unique(ids[standing], return_counts=True)
+    order = np.argsort(-rows)
+    assert rows.size >= 2 and rows[order[1]] >= 200 and rows[order[:2]].sum() >= 300, rows
+    assert (rows[order[2:]] <= 2).all(), dict(zip(tracks[order[2:]], rows[order[2:]], strict=True))
     # streaming writes the scores of each flushed frame and then forgets them
     assert states("streamed", flush=1e-9)[1] == states("again")[1]

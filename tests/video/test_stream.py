@@ -174,23 +174,24 @@ def test_flush_into_an_unwritable_place_is_one_line_and_exit_2(tmp_path, capsys)
 
 def test_sigterm_with_flush_keeps_what_was_streamed_and_writes_the_rest(
         tmp_path, capsys, monkeypatch) -> None:
-    """SIGTERM at frame 40 of a run that flushes at every frame: exit 143, and the files hold
-    frames 0 to 38 exactly as a plain run of 39 frames writes them."""
+    """SIGTERM while frame 40 is detected, in a run that flushes at every frame: exit 143, and
+    the files hold frames 0 to 39 (the frame the signal arrived in is finished) exactly as a
+    plain run of 40 frames writes them."""
     from _media import box_video, stop_at_frame
 
     video = box_video(tmp_path / "v.avi", n=80)
     assert main(["track", str(video), "--out", str(tmp_path / "plain"), "--no-video",
-                 "--max-frames", "39"]) == 0
+                 "--max-frames", "40"]) == 0
     stop_at_frame(monkeypatch, 40, lambda: os.kill(os.getpid(), signal.SIGTERM))
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out), "--no-video", "--flush", "1e-9"]) == 143
     err = capsys.readouterr().err.strip().splitlines()[-1]
-    assert err.startswith("error: terminated after 39 frames"), err
+    assert err.startswith("error: terminated after 40 frames"), err
     for name in ("results.txt", "states.csv"):
         assert (out / name).read_bytes() == (tmp_path / "plain" / name).read_bytes(), name
     assert (out / "results.txt").read_text().count("\n") > 20
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["interrupted"] and summary["frames"] == 39
+    assert summary["interrupted"] and summary["frames"] == 40
     assert not [p for p in out.iterdir() if p.name.startswith(".")]
 
 

@@ -102,6 +102,63 @@ def test_ctrl_c_inside_the_tracker_is_also_clean() -> None:
     assert res.interrupted and res.n_frames == 3
 
 
+class SignallingTracker(CountingTracker):
+    """Sends ``sig`` to its own process in the middle of the step of frame 3, then goes on
+    with the step (as a compiled kernel would: Python code runs after the signal arrived)."""
+
+    def __init__(self, sig: int) -> None:
+        super().__init__()
+        self.sig = sig
+        self.finished: list[int] = []
+        self.handlers: list[object] = []
+
+    def step(self, dets: Detections, rescue=None) -> TrackFrame:
+        import os
+        import signal
+
+        if dets.frame == 3:
+            os.kill(os.getpid(), self.sig)
+            self.handlers.append(signal.getsignal(signal.SIGTERM))
+        out = super().step(dets, rescue)
+        self.finished.append(dets.frame)
+        return out
+
+
+@pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
+def test_a_signal_during_a_frame_ends_the_run_after_that_frame(name: str) -> None:
+    """Ctrl-C or the command line's SIGTERM in the middle of the tracker's step: the step
+    finishes (an exception raised inside the compiled kernels would come out of them as a
+    SystemError), the frame is kept, the run ends there, and the handler that was installed
+    is the one that decides (SIGTERM: the command line's, which says it was terminated)."""
+    import signal
+
+    from mvtrack.cli import _signals
+
+    tracker = SignallingTracker(getattr(signal, name))
+    before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+    with _signals.sigterm_as_interrupt():
+        res = run_frames(_frames(10), one_blob_detector, tracker, progress=False)
+        assert _signals.terminated() == (name == "SIGTERM")
+    assert res.interrupted and res.n_frames == 4 and len(res.tracks) == 4
+    assert tracker.finished == [0, 1, 2, 3]
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+
+
+def test_a_signal_without_a_python_handler_is_left_alone() -> None:
+    """An ignored SIGTERM stays ignored during the loop (so does the default one, which ends
+    the process): only signals with a Python handler wait for the end of the frame."""
+    import signal
+
+    tracker = SignallingTracker(signal.SIGTERM)
+    old = signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    try:
+        res = run_frames(_frames(6), one_blob_detector, tracker, progress=False)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+    assert not res.interrupted and res.n_frames == 6
+    assert tracker.handlers == [signal.SIG_IGN]
+
+
 def test_source_failing_mid_way_is_reported_not_raised() -> None:
     res = run_frames(_frames(10, fail_at=4, exc=OSError("stream dropped")), one_blob_detector,
                      CountingTracker(), progress=False)
@@ -234,8 +291,7 @@ def test_no_video_skips_the_mp4(tmp_path) -> None:
 
 def _gate_probe(config, offset_dir: np.ndarray, factor: float, wh=(10.0, 8.0)) -> bool:
     """Track one ``wh`` box moving 2 px/frame for 12 frames, then put the next detection at
-    ``factor`` times the outermost drawn gate's extent along ``offset_dir`` (the second-stage
-    gate where the tracker has one); True if it is associated."""
+    ``factor`` times the drawn gate's extent along ``offset_dir``; True if it is associated."""
     from mvtrack.tracking import Tracker
     from mvtrack.viz.annotate import gate_ellipses
 
@@ -247,9 +303,6 @@ def _gate_probe(config, offset_dir: np.ndarray, factor: float, wh=(10.0, 8.0)) -
     gates = tracker.gates()
     assert len(gates) == 1 and gates.track_id[0] > 0
     center, shape, r2 = gates.center, gates.shape, gates.r2
-    if gates.second_shape is not None:
-        assert gates.second_r2 > r2  # euclidean first gate: the second stage's is wider
-        shape, r2 = gates.second_shape, gates.second_r2
     # distance to the boundary along offset_dir: t with (t u)ᵀ C⁻¹ (t u) = r²
     u = offset_dir / np.linalg.norm(offset_dir)
     t = np.sqrt(r2 / (u @ np.linalg.inv(shape[0]) @ u))
@@ -259,63 +312,69 @@ def _gate_probe(config, offset_dir: np.ndarray, factor: float, wh=(10.0, 8.0)) -
     return bool(len(out) and out.det_index[out.track_id == gates.track_id[0]][0] >= 0)
 
 
-@pytest.mark.parametrize("preset", ["paper1", "paper2", "default", "mahalanobis"])
+@pytest.mark.parametrize("preset", ["paper1", "paper2", "default", "uncoupled"])
 @pytest.mark.parametrize("direction", [(1.0, 0.0), (0.0, 1.0), (1.0, -1.0)])
 @pytest.mark.parametrize("wh", [(10.0, 8.0), (150.0, 40.0)])
 def test_drawn_gate_is_the_trackers_gate(
     preset: str, direction: tuple[float, float], wh: tuple[float, float]
 ) -> None:
-    """A 150×40 box is larger than the default preset's size_ref: its gates stretch along x,
-    and the drawn gate stretches with them. (The recovery stage, around the last measurement,
-    is no gate and is not drawn: it is off here; its radius grows with large boxes too.)"""
+    """The region :meth:`Tracker.gates` gives to draw is the one the next step applies: a
+    detection just inside its boundary is taken, one just outside is not, along any direction,
+    for a small and a large box (the default's gate, the filter's innovation covariance in
+    box sizes, grows with the box), for the
+    papers' circle and coupled region, the default (the fused compiled step) and the
+    uncoupled gate (the step composed from Python)."""
     from mvtrack.tracking import TrackerConfig
     from mvtrack.tracking import preset as make_preset
 
-    if preset == "mahalanobis":  # the closed-form kalman-cv's disc, (P̄ + r f²) I
-        config = TrackerConfig(fps=30.0, distance="mahalanobis", gate=None, second_gate=None)
+    if preset == "uncoupled":  # eq. (9) of paper 2 on the default's filter
+        config = TrackerConfig(fps=30.0, distance="uncoupled")
     else:
         config = make_preset(preset, fps=30.0)
-    config = config.replace(recover_speed=None)
     d = np.asarray(direction)
     assert _gate_probe(config, d, 0.97, wh)
     assert not _gate_probe(config, d, 1.03, wh)
 
 
-def test_a_large_box_is_drawn_with_the_stretched_gate() -> None:
-    """The default preset's gates of a 150×40 box are 3 times wider along x than the 10 px
-    circle (second stage: 20 px) of a small box; the drawing showed the small box's circles
-    and the tracker took detections far outside them."""
+def test_a_large_box_is_drawn_with_a_gate_as_wide_as_the_box() -> None:
+    """The default's gate is in box sizes: a 150×40 box's gate is about 150/40 times wider
+    than high; the drawn outline crosses the row of its centre where the tracker's gate ends,
+    and the tracker takes a detection there, far beyond the gate's height."""
     from mvtrack.tracking import Tracker, TrackerConfig
-    from mvtrack.viz.annotate import annotate_frame
+    from mvtrack.viz.annotate import annotate_frame, gate_ellipses
 
-    config = TrackerConfig()
-    assert config.size_ref == 50.0 and config.second_gate == 20.0  # the figures below
-    tracker = Tracker(config)
+    tracker = Tracker(TrackerConfig())
     for k in range(8):
         tracker.step(Detections(k, [[100.0 + 2.0 * k, 60.0]], [[150.0, 40.0]]))
     g = tracker.gates()
-    np.testing.assert_allclose(g.shape[0], np.diag([9.0, 1.0]))  # f_x = 150/50, f_y = 1
-    np.testing.assert_allclose(g.second_shape[0], np.diag([9.0, 1.0]))
+    (a, b), angle = gate_ellipses(g.shape, g.r2)[0][0], gate_ellipses(g.shape, g.r2)[1][0]
+    assert abs(angle) < 1.0 and 3.0 < a / b < 4.5  # along x, about w / h = 3.75
     c = g.center[0]
-    # the second gate's outline crosses the row y = c_y 60 px right of the centre, not 20 px
     frame = np.zeros((120, 320, 3), np.uint8)
     img = annotate_frame(frame, TrackFrame.empty(8), gate_center=g.center,
-                         gate_cov=g.shape, gate_r2=g.r2, outer_cov=g.second_shape,
-                         outer_r2=g.second_r2)
+                         gate_cov=g.shape, gate_r2=g.r2)
     row = img[round(c[1]), :, :].any(axis=1)
     right = np.flatnonzero(row[round(c[0]):])
-    assert right.size and 55 <= right.max() <= 65
-    assert row[round(c[0]) + 28 : round(c[0]) + 32].any()  # the first gate: 30 px
-    # and the tracker takes a detection 40 px to the right (outside the old 20 px drawing)
-    taken = tracker.step(Detections(8, c[None] + [[40.0, 0.0]], [[150.0, 40.0]]))
+    assert right.size and abs(right.max() - a) <= 2.0  # anti-aliased outline
+    # the tracker takes a detection at 0.9 a to the right (3 gate heights away) ...
+    assert 0.9 * a > 3 * b
+    taken = tracker.step(Detections(8, c[None] + [[0.9 * a, 0.0]], [[150.0, 40.0]]))
     assert taken.det_index.tolist() == [0]
+    # ... and not one as far below its centre
+    tracker2 = Tracker(TrackerConfig())
+    for k in range(8):
+        tracker2.step(Detections(k, [[100.0 + 2.0 * k, 60.0]], [[150.0, 40.0]]))
+    below = tracker2.step(Detections(8, c[None] + [[0.0, 0.9 * a]], [[150.0, 40.0]]))
+    assert (below.det_index[below.track_id > 0] < 0).all()
 
 
-def test_size_dependent_defaults_scale_with_the_image() -> None:
+def test_the_video_sets_the_image_size_and_leaves_the_tracker_alone() -> None:
+    """One tracker for every video: the image size reaches the tracker as its frame (a track
+    that leaves it ends), nothing else of the tracker changes with the image; the front end's
+    blob stage follows the image."""
     from mvtrack.tracking import TrackerConfig
-    from mvtrack.video import resolve_settings
+    from mvtrack.video import build_tracker, build_tracker_config, resolve_settings
 
-    base = TrackerConfig()
     small = resolve_settings(RunSettings(detector=DM), (320, 240))
     assert small.detector_params == {"min_area": 40.0, "close_size": 7, "ghost_every": 5,
                                      "hold": 1800,  # 60 s at the default 30 fps
@@ -327,29 +386,26 @@ def test_size_dependent_defaults_scale_with_the_image() -> None:
     assert slow.detector_params["hold"] == 600
     other = resolve_settings(RunSettings(detector="mog2"), (320, 240))
     assert other.detector_params == {"min_area": 40.0, "close_size": 7}
-    assert small.tracker == {"measurement_std": 2.0, "size_gate": None,  # blobs: no size gate
-                             "frame_size": [320.0, 240.0],  # tracks end where they leave
-                             "relink_window": None}  # the loop relinks with appearance
+    assert small.tracker == {"frame_size": [320.0, 240.0]}
     big = resolve_settings(RunSettings(detector=DM), (640, 480))  # s² = 4
     assert big.detector_params["min_area"] == 160.0 and big.detector_params["close_size"] == 7
-    assert big.tracker["measurement_std"] == 4.0
-    if base.distance == "euclidean" and base.gate is not None:
-        assert big.tracker["gate"] == pytest.approx(4 * base.gate)
-    if base.second_gate is not None:
-        assert big.tracker["second_gate"] == pytest.approx(2 * base.second_gate)
+    assert big.tracker == {"frame_size": [640.0, 480.0]}
+    for s, size in ((small, (320.0, 240.0)), (big, (640.0, 480.0))):
+        assert build_tracker_config(s, 30.0) == TrackerConfig(fps=30.0)
+        assert build_tracker(s, 30.0).frame_size == size
     mine = resolve_settings(
-        RunSettings(tracker={"gate": 50.0, "measurement_std": 1.0}, detector=DM,
+        RunSettings(tracker={"gate": 50.0, "measurement_noise": 0.2}, detector=DM,
                     detector_params={"min_area": 5.0}), (640, 480))
-    assert mine.tracker["gate"] == 50.0 and mine.tracker["measurement_std"] == 1.0
+    assert mine.tracker == {"gate": 50.0, "measurement_noise": 0.2,
+                            "frame_size": [640.0, 480.0]}
+    assert build_tracker_config(mine, 30.0) == TrackerConfig(gate=50.0, measurement_noise=0.2)
     assert mine.detector_params["min_area"] == 5.0
     tiny = resolve_settings(RunSettings(detector=DM), (96, 64))
-    assert tiny.tracker == {"measurement_std": 2.0, "size_gate": None,
-                            "frame_size": [96.0, 64.0], "relink_window": None}
+    assert tiny.tracker == {"frame_size": [96.0, 64.0]}
     assert tiny.detector_params["min_area"] == 3.0
     paper = resolve_settings(RunSettings(tracker={"preset": "paper1"}), (640, 480))
-    assert paper.tracker == {"preset": "paper1"}
-    # the scene front end sizes its own blob stage (working pixels, closing from its prior);
-    # the tracker's pixel values are scaled as for any front end
+    assert paper.tracker == {"preset": "paper1", "frame_size": [640.0, 480.0]}
+    # the scene front end sizes its own blob stage (working pixels, closing from its prior)
     scene = resolve_settings(RunSettings(detector="scene"), (640, 480))
     assert scene.detector_params == {} and scene.tracker == big.tracker
 

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack.association.regions import gate_shapes
+from mvtrack.association.gate import Gate
 from mvtrack.types import TrackFrame, TrackState
 from mvtrack.viz.annotate import (
     GATE_COLOR,
@@ -103,7 +103,9 @@ def test_rotated_gate_ellipse_is_drawn_along_its_major_axis() -> None:
     assert np.all(np.abs(np.sqrt(r2) - 1.0) < 0.2)
 
 
-def test_coupled_gate_shape_agrees_with_the_coupled_distance() -> None:
+def test_drawn_gate_regions_agree_with_each_distance() -> None:
+    """The regions :meth:`Gate.regions` gives to draw lie where each quadratic distance
+    (:mod:`mvtrack.association.distances`, computed apart from the gate) equals its gate."""
     from mvtrack.association import distances
 
     rng = np.random.default_rng(7)
@@ -114,12 +116,14 @@ def test_coupled_gate_shape_agrees_with_the_coupled_distance() -> None:
     S = cov + 4.0 * np.eye(2)
     vel = rng.normal(scale=2.0, size=(k, 2))
     vel[0] = [0.1, 0.0]  # slow: eq. (9) fallback
+    view = distances.TrackView(xy, cov, S, vel, np.zeros((k, 2)))
     for name in ("euclidean", "uncoupled", "coupled", "mahalanobis"):
         gate = distances.default_gate(name)
-        center, shape, r2 = gate_shapes(name, xy, cov, S, vel, gate)
-        axes, angle = gate_ellipses(shape, r2)
-        pts = ellipse_points(center, axes, angle, n_points=16)
-        view = distances.TrackView(xy, cov, S, vel, np.zeros((k, 2)))
+        regions = Gate.build(name, view, gate).regions(np.arange(k), np.arange(k) + 1)
+        np.testing.assert_array_equal(regions.center, xy)
+        assert regions.r2 == gate and regions.track_id.tolist() == list(range(1, k + 1))
+        axes, angle = gate_ellipses(regions.shape, regions.r2)
+        pts = ellipse_points(regions.center, axes, angle, n_points=16)
         det = pts.reshape(-1, 2)
         ti = np.repeat(np.arange(k), 16)
         dj = np.arange(k * 16)
@@ -188,19 +192,22 @@ def test_trajectory_figure_and_rows(tmp_path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["traj.png"]
 
 
-def test_outer_gate_circle_is_drawn_dimmer_and_wider() -> None:
-    from mvtrack.viz.annotate import OUTER_GATE_COLOR
-
+def test_annotate_frame_draws_the_gate_it_is_given_and_only_that() -> None:
+    """One gate per track (there is no second stage to draw): a 10 px circle in the gate
+    colour, nothing else in it beyond the box."""
     frame = np.zeros((100, 100, 3), np.uint8)
     tf = _frame(0, [1], [TrackState.CONFIRMED], [[50, 50]], wh=(4, 4))
     out = annotate_frame(frame, tf, gate_center=np.array([[50.0, 50.0]]),
-                         gate_cov=np.eye(2)[None], gate_r2=10.0**2, outer_r2=30.0**2)
-    ys, xs = np.nonzero((np.abs(out.astype(int) - OUTER_GATE_COLOR).sum(axis=2) < 60)
-                        & out.any(axis=2))
-    r = np.hypot(xs - 50, ys - 50)
-    assert r.size > 50 and np.median(r) == pytest.approx(30.0, abs=1.0)
+                         gate_cov=np.eye(2)[None], gate_r2=10.0**2)
     inner = np.nonzero(np.abs(out.astype(int) - GATE_COLOR).sum(axis=2) < 60)
-    assert np.median(np.hypot(inner[1] - 50, inner[0] - 50)) == pytest.approx(10.0, abs=1.0)
+    r = np.hypot(inner[1] - 50, inner[0] - 50)
+    assert r.size > 30 and np.median(r) == pytest.approx(10.0, abs=1.0)
+    none = annotate_frame(frame, tf)
+    assert not (np.abs(none.astype(int) - GATE_COLOR).sum(axis=2) < 60).any()
+    # what the gate adds to the drawing is the circle, nothing farther out or nearer in
+    ys, xs = np.nonzero((out != none).any(axis=2))
+    r = np.hypot(xs - 50, ys - 50)
+    assert r.size > 30 and 8.5 < r.min() and r.max() < 11.5
 
 
 # ------------------------------------------------------------ labels readable in the frame

@@ -48,8 +48,8 @@ def register(app: typer.Typer) -> None:
         coasting: Annotated[
             bool,
             typer.Option("--coasting/--no-coasting",
-                         help="Also write the rows of coasting tracks (no detection, up to the "
-                         "tracker's coast_output) to results.txt."),
+                         help="Also write the rows of coasting tracks (no detection, while the "
+                         "prediction is within the tracker's coast_std) to results.txt."),
         ] = False,
         no_video: NoVideo = False,
         no_templates: NoTemplates = False,

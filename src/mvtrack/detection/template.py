@@ -201,7 +201,7 @@ class TemplateBank(TrackBoxes):
         uids: ArrayLike,
         predicted_xy: ArrayLike,
         wh: ArrayLike | None = None,
-        gate_radius: float | None = None,
+        gate_radius: float | ArrayLike | None = None,
     ) -> tuple[BoolArray, FloatArray, FloatArray]:
         r"""Search the missed tracks ``uids`` by NCC around their predictions (SPEC §1.1 [R]).
 
@@ -230,8 +230,9 @@ class TemplateBank(TrackBoxes):
         wh : (K, 2), optional
             Their box sizes; unused (the template keeps the size of the last detected box),
             accepted for the tracker's callback signature.
-        gate_radius : float, optional
-            Search radius in px (default: the bank's ``gate_radius``).
+        gate_radius : float or (K,) floats, optional
+            Search radius in px, one for all or one per track (default: the bank's
+            ``gate_radius``).
 
         Returns
         -------
@@ -248,8 +249,10 @@ class TemplateBank(TrackBoxes):
         pxy = np.asarray(predicted_xy, np.float64).reshape(-1, 2)
         if pxy.shape[0] != uids.size:
             raise ValueError(f"rescue: {uids.size} uids but {pxy.shape[0]} predicted positions")
-        r = self.gate_radius if gate_radius is None else float(gate_radius)
         k = uids.size
+        radii = np.broadcast_to(
+            np.asarray(self.gate_radius if gate_radius is None else gate_radius, np.float64),
+            (k,)).tolist()
         found = np.zeros(k, bool)
         out = np.full((k, 2), np.nan)
         score = np.full(k, np.nan)
@@ -295,7 +298,7 @@ class TemplateBank(TrackBoxes):
             t = self._current(int(pos[j]))
             if t is None:
                 continue
-            res = search_gate(frame, t, px, py, r, self.smooth, self._pad)
+            res = search_gate(frame, t, px, py, radii[j], self.smooth, self._pad)
             if res is None:  # leaving the image, or only flat placements inside the gate
                 continue
             best, mx, my = res
@@ -306,7 +309,7 @@ class TemplateBank(TrackBoxes):
                 self._f[pos[j], self._LAST] = out[j]  # held: the match is its last place
         return found, out, score
 
-    def bind(self, frame: Image, gate_radius: float | None = None) -> RescueFn:
+    def bind(self, frame: Image, gate_radius: float | ArrayLike | None = None) -> RescueFn:
         """``rescue(uids, predicted_xy, wh) -> (found, xy)`` on ``frame`` (a tracker's callback)."""
 
         def rescue(

@@ -53,6 +53,7 @@ def track_scene(
     frames: list[NDArray[np.uint8]] | None = None,
     prime: int = 0,
     template_params: dict[str, Any] | None = None,
+    frame_size: tuple[float, float] | None = None,
 ) -> SceneRun:
     """Render ``scene`` with ``seed`` (or use ``frames``), track it, match to the truth.
 
@@ -60,7 +61,10 @@ def track_scene(
     (:func:`mvtrack.sim.backgrounds.render_background`), as a camera that has been running
     before the sequence starts: the disturbance map's background then holds the empty road
     instead of ``B_0 = I_0`` with the vehicles in it (which leaves a ghost blob behind every
-    vehicle that is in view at frame 0).
+    vehicle that is in view at frame 0). ``frame_size`` is the tracker's image
+    (:class:`~mvtrack.tracking.Tracker`: a track whose prediction leaves it ends there), as
+    ``mvtrack track`` gives it (the scene's size, :func:`default_frame_size`); None for the
+    papers' systems, whose tracks end after their misses only.
     """
     from mvtrack.detection import make_detector
     from mvtrack.sim.backgrounds import render_background
@@ -74,7 +78,7 @@ def track_scene(
         empty = render_background(scene, seed)
         for _ in range(prime):
             det(empty)
-    tracker = Tracker(config)
+    tracker = Tracker(config, frame_size=frame_size)
     rescue_settings = RunSettings(template_params=dict(template_params or {}))
     rescuer = build_rescuer(rescue_settings, tracker, det) if templates else None
     source = frames if frames is not None else render_frames(scene, seed)
@@ -325,10 +329,17 @@ def prediction_errors(run: SceneRun, obj_id: int, warmup_hits: int = 6) -> dict[
     return out
 
 
+def default_frame_size(scene: Scene) -> tuple[float, float]:
+    """The image size ``mvtrack track`` gives the tracker of this scene's video
+    (:func:`mvtrack.video.resolve_settings`): a track whose prediction leaves it ends."""
+    return float(scene.size[0]), float(scene.size[1])
+
+
 def default_config(scene: Scene) -> TrackerConfig:
     """The tracker configuration ``mvtrack track`` uses by default for this scene's video
-    (the ``default`` preset with the size-dependent defaults of
-    :func:`mvtrack.video.resolve_settings`)."""
+    (the ``default`` preset at the scene's frame rate, as
+    :func:`mvtrack.video.build_tracker_config` builds it; its image size is
+    :func:`default_frame_size`)."""
     from mvtrack.video import build_tracker_config
 
     paper = RunSettings(detector=PAPER_DETECTOR)

@@ -115,7 +115,8 @@ def simulate(
         cost = pair_distance(distance, view, dets, ti, dj, **params)
         u = 4.0 * float(np.abs(cost).max()) + 1.0  # large enough to match both tracks
         a = assign(ti, dj, cost, n, n, rule, unmatched_cost=u)  # type: ignore[arg-type]
-        det = a.det_of_track(n)
+        det = np.full(n, -1, dtype=np.intp)  # each track's detection row, −1: none
+        det[a.track] = a.det
         got = det >= 0
         meas = np.where(got[:, None], det_xy[np.maximum(det, 0)], np.nan)
         taken[:, k] = np.where(got, origin[np.maximum(det, 0)], -1).reshape(s_runs, 2)

@@ -33,6 +33,7 @@ import numpy as np
 from mvtrack.experiments._video import (
     SceneRun,
     default_config,
+    default_frame_size,
     pipeline_blob_params,
     track_scene,
     trajectory_plot,
@@ -81,7 +82,8 @@ def _settings(scene: Any) -> dict[str, dict[str, Any]]:
                                            "template_params": {"min_score": LOOSE_NCC}}
         out[f"{p}, no templates"] = {"config": cfg, "detector_params": SPEC_BLOBS,
                                      "templates": False}
-    out["default"] = {"config": default_config(scene), "detector_params": pipe}
+    out["default"] = {"config": default_config(scene), "detector_params": pipe,
+                      "frame_size": default_frame_size(scene)}
     return out
 
 
@@ -120,7 +122,8 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
             tr = track_scene(scene, opts["config"], seed=s, frames=frames,
                              templates=opts.get("templates", True),
                              detector_params=opts["detector_params"],
-                             template_params=opts.get("template_params"))
+                             template_params=opts.get("template_params"),
+                             frame_size=opts.get("frame_size"))
             per.setdefault(name, []).append(measure_run(tr))
             if r == 0:
                 names.append(name)

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from mvtrack.experiments._video import (
     SceneRun,
     default_config,
+    default_frame_size,
     pipeline_blob_params,
     summarise,
     track_scene,
@@ -74,7 +75,8 @@ def _configs(scene: Any) -> dict[str, dict[str, Any]]:
     fps = scene.fps
     out = {d: {"config": paper2(d, fps=fps), "detector_params": SPEC_BLOBS} for d in DISTANCES}
     out["default"] = {"config": default_config(scene),
-                      "detector_params": pipeline_blob_params(scene.size, scene.fps)}
+                      "detector_params": pipeline_blob_params(scene.size, scene.fps),
+                      "frame_size": default_frame_size(scene)}
     return out
 
 
@@ -103,7 +105,8 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
                     continue
                 key = f"{name}, {tag}" if tag else name
                 tr = track_scene(scene, opts["config"], seed=s, frames=frames,
-                                 detector_params=opts["detector_params"])
+                                 detector_params=opts["detector_params"],
+                                 frame_size=opts.get("frame_size"))
                 res[key].append({"seed": s, "p1": p1_result(tr), "score": score_run(tr),
                                  "tracks": summarise(tr, MIN_ASSOC)["tracks"]})
                 if r == 0 and not tag:

@@ -27,6 +27,7 @@ from mvtrack.experiments._video import (
     SceneRun,
     breaks,
     default_config,
+    default_frame_size,
     prediction_errors,
     summarise,
     track_scene,
@@ -154,7 +155,9 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
         s = seed + r
         entry: dict[str, Any] = {"seed": s}
         for name, (cfg, prime) in settings.items():
-            tr = track_scene(scene, cfg, seed=s, prime=prime, detector_params=SPEC_BLOBS)
+            size = default_frame_size(scene) if name == "default" else None  # as mvtrack track
+            tr = track_scene(scene, cfg, seed=s, prime=prime, detector_params=SPEC_BLOBS,
+                             frame_size=size)
             entry[name] = _measure(tr, v9)
             if r == 0:
                 first[name] = tr

@@ -20,12 +20,20 @@ kept in :attr:`PipelineResult.scores`.
 It shows a tqdm progress bar on stderr when stderr is a terminal, stops cleanly on Ctrl-C
 (``KeyboardInterrupt`` inside the loop ends it with ``interrupted=True``; what was tracked so
 far is returned) and treats a source that fails mid-way the same (``error`` holds the message).
+
+A SIGINT or SIGTERM that arrives while a frame is processed takes effect when the frame is done
+(:func:`frame_boundary_signals`): the handler that was installed for it (Python's Ctrl-C, the
+command line's SIGTERM) is called then, not in the middle of the tracker's compiled kernels,
+which turn an exception raised by a handler inside them into a ``SystemError``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
@@ -167,6 +175,47 @@ def progress_bar(total: int | None, desc: str, enabled: bool | None = None) -> A
                 leave=False, dynamic_ncols=True)
 
 
+@contextlib.contextmanager
+def frame_boundary_signals() -> Iterator[Callable[[], None]]:
+    """Inside the block, SIGINT and SIGTERM wait for the caller's next check.
+
+    Yields ``check()``: it calls the handler that was installed for the first signal that
+    arrived since the last check (Python's ``default_int_handler`` raises
+    ``KeyboardInterrupt``; ``mvtrack``'s command line raises its ``Terminated`` on SIGTERM)
+    and does nothing when none arrived. A signal whose handler is not a Python function (the
+    default SIGTERM, which ends the process; an ignored one) is left alone, and so is every
+    signal outside the main thread, where Python runs no handlers. A signal left unchecked
+    when the block ends is handled as it ends.
+    """
+    pending: list[int] = []
+    old: dict[int, Callable[..., Any]] = {}
+
+    def check() -> None:
+        if pending:
+            signum = pending[0]
+            pending.clear()
+            old[signum](signum, None)
+
+    if threading.current_thread() is not threading.main_thread():
+        yield check
+        return
+
+    def record(signum: int, frame: Any) -> None:
+        pending.append(signum)
+
+    for s in (signal.SIGINT, signal.SIGTERM):
+        handler = signal.getsignal(s)
+        if callable(handler):
+            old[s] = handler
+            signal.signal(s, record)
+    try:
+        yield check
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
+        check()
+
+
 def run_frames(
     frames: Iterable[Image],
     detector: Callable[[Image], Detections],
@@ -217,7 +266,8 @@ def run_frames(
     -------
     PipelineResult
         Never raises on Ctrl-C or on a source error after the first frame: the run ends
-        early and says so.
+        early and says so. A signal during a frame ends the run after that frame
+        (:func:`frame_boundary_signals`): the frame is kept whole.
     """
     if max_frames is not None and max_frames < 1:
         raise ValueError(f"max_frames must be at least 1, got {max_frames}")
@@ -231,37 +281,39 @@ def run_frames(
     observe = getattr(detector, "observe", None)
     k = 0
     try:
-        while max_frames is None or k < max_frames:
-            try:
-                image = next(iterator)
-            except StopIteration:
-                break
-            except (ValueError, OSError) as exc:  # the source dropped mid-way
-                if k == 0:
-                    raise
-                result.error = str(exc)
-                break
-            dets = _with_frame(detector(image), k)
-            rescue = rescuer.callback(image, dets) if rescuer is not None else None
-            tracks = tracker.step(dets, rescue=rescue)
-            if observe is not None:
-                observe(dets, tracks)
-            if keep:
-                result.flags.append(flags_of(detector, len(dets)))
-            if rescuer is not None:
-                rescuer.observe(image, dets, tracks)
-            if relink is not None:
-                live = getattr(getattr(tracker, "tracks", None), "track_id", None)
-                tracks = relink(image, tracks, live)
-            if keep:
-                result.tracks.append(tracks)
-                result.scores.append(shown_scores(rescuer, relink))
-            result.n_frames = k + 1
-            result.n_detections += len(dets)
-            if on_frame is not None:
-                on_frame(k, image, dets, tracks)
-            bar.update(1)
-            k += 1
+        with frame_boundary_signals() as check_signals:
+            while max_frames is None or k < max_frames:
+                check_signals()  # a signal during the last frame ends the run here
+                try:
+                    image = next(iterator)
+                except StopIteration:
+                    break
+                except (ValueError, OSError) as exc:  # the source dropped mid-way
+                    if k == 0:
+                        raise
+                    result.error = str(exc)
+                    break
+                dets = _with_frame(detector(image), k)
+                rescue = rescuer.callback(image, dets) if rescuer is not None else None
+                tracks = tracker.step(dets, rescue=rescue)
+                if observe is not None:
+                    observe(dets, tracks)
+                if keep:
+                    result.flags.append(flags_of(detector, len(dets)))
+                if rescuer is not None:
+                    rescuer.observe(image, dets, tracks)
+                if relink is not None:
+                    live = getattr(getattr(tracker, "tracks", None), "track_id", None)
+                    tracks = relink(image, tracks, live)
+                if keep:
+                    result.tracks.append(tracks)
+                    result.scores.append(shown_scores(rescuer, relink))
+                result.n_frames = k + 1
+                result.n_detections += len(dets)
+                if on_frame is not None:
+                    on_frame(k, image, dets, tracks)
+                bar.update(1)
+                k += 1
     except KeyboardInterrupt:
         result.interrupted = True
     finally:

@@ -1,7 +1,8 @@
 r"""A track that ends behind an occluder and a new one that starts where it should reappear,
 looking the same, are one object: the new one takes the old ID (online, in the video loop).
 
-The tracker ends a track after ``max_coast`` without a detection; a person hidden by a lamp
+The tracker ends a track once its prediction is too uncertain to tell it from a neighbour
+(``lost_std``) or after ``max_misses`` frames without a detection; a person hidden by a lamp
 post for longer comes back as a new track. :class:`Relinker` keeps the confirmed tracks that
 ended in the last ``window`` seconds (their last position ``x``, velocity ``v`` and box, and
 an appearance: the colour histogram ``a`` of their measured boxes, an exponential average).

@@ -213,18 +213,39 @@ class StoppedVehicleRescuer:
         self.held_scores = held_scores(self.tracker, tracks, *self._accepted)
 
 
-def gate_radius_of(tracker: Any, default: float) -> float:
-    """The tracker's gate as a radius in px when its distance is Euclidean, else ``default``.
+def search_radii(tracker: Any, uids: Any, default: float, gates: Any = None) -> FloatArray:
+    """The search radius in px of each track ``uids`` (internal uids): the semi-major axis of
+    its gate region.
 
-    The radius is ``sqrt(r²)`` of the tracker's gates (:meth:`~mvtrack.tracking.Tracker.gates`),
-    the circle of a box up to ``size_ref``. Mahalanobis-type and IoU gates have no single
-    radius in pixels; there the bank's own ``gate_radius`` (paper 1's 20 px) is used.
+    The tracker's gate of a track (:meth:`~mvtrack.tracking.Tracker.gates`, the gate the
+    step being made applies) is the region :math:`(z - c)^T C^{-1} (z - c) \\le r^2`; the
+    farthest a detection may lie from the centre is :math:`\\sqrt{r^2 \\lambda_{max}(C)}`
+    (:func:`mvtrack.viz.annotate.gate_ellipses`). For the Euclidean gate that is its radius
+    (paper 1's 20 px circle); for the default, the filter's innovation covariance, it grows
+    with the box and with the time a track has gone without detection. ``default`` (the
+    bank's ``gate_radius``) where the tracker has no gates, where the gate is not a region
+    about the prediction (``iou``, ``coupled-literal``) or where ``uids`` holds no live track.
+    ``gates``: the tracker's gates when the caller has them already.
     """
-    config = getattr(tracker, "config", None)
-    if getattr(config, "distance", None) != "euclidean" or not hasattr(tracker, "gates"):
-        return default
-    r2 = tracker.gates().r2
-    return math.sqrt(float(r2)) if r2 else default
+    uids = np.asarray(uids, np.int64).reshape(-1)
+    out = np.full(uids.size, float(default))
+    if gates is None and (uids.size == 0 or not hasattr(tracker, "gates")):
+        return out
+    from mvtrack.viz.annotate import gate_ellipses
+
+    g = tracker.gates() if gates is None else gates
+    if len(g) == 0 or uids.size == 0:
+        return out
+    order = np.argsort(g.uid, kind="stable")
+    pos = np.minimum(np.searchsorted(g.uid[order], uids), len(g) - 1)
+    row = order[pos]
+    known = g.uid[row] == uids
+    shape = g.shape[row]
+    ok = known & np.isfinite(shape.reshape(-1, 4)).all(axis=1) & math.isfinite(g.r2)
+    if ok.any():
+        axes, _ = gate_ellipses(shape[ok], g.r2)
+        out[ok] = axes[:, 0]
+    return out
 
 
 class TemplateRescuer:
@@ -245,8 +266,8 @@ class TemplateRescuer:
         to the internal ``uid`` the rescue callback receives, and to forget deleted tracks.
         May be given later with :meth:`attach`.
     gate_radius : float, optional
-        Search radius in px; default: the tracker's gate radius for the Euclidean distance
-        (``sqrt(gate)``), else the bank's ``gate_radius``.
+        Search radius in px for every track; default: each track's from its gate region in
+        the tracker (:func:`search_radii`), the bank's ``gate_radius`` where it has none.
     detector : FrontEnd, optional
         The detection front end; its foreground ``mask`` after each frame restricts the
         templates to the objects' own pixels (see :meth:`TemplateBank.observe`). Strongly
@@ -278,9 +299,8 @@ class TemplateRescuer:
         self.bank = bank
         self.tracker = tracker
         self.detector = detector
-        self._radius = gate_radius
+        self._radius = None if gate_radius is None else float(gate_radius)
         self.max_radius = None if max_radius is None else float(max_radius)
-        self._tracker_radius: tuple[Any, float] | None = None  # (tracker, its gate radius)
         self.held_scores: HeldScores = NO_SCORES
         self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
 
@@ -289,26 +309,30 @@ class TemplateRescuer:
         self.tracker = tracker
         self.bank.clear()
 
-    @property
-    def gate_radius(self) -> float:
-        """The search radius in px (the gate, capped at ``max_radius``)."""
+    def radii(self, uids: Any, gates: Any = None) -> FloatArray:
+        """The search radius in px of each track ``uids``: ``gate_radius`` if given, else its
+        gate's (:func:`search_radii`; ``gates``: the tracker's, when known); at most
+        ``max_radius``."""
+        uids = np.asarray(uids, np.int64).reshape(-1)
         if self._radius is not None:
-            r = float(self._radius)
-        else:  # a tracker's gate does not change: read it once
-            if self._tracker_radius is None or self._tracker_radius[0] is not self.tracker:
-                radius = gate_radius_of(self.tracker, self.bank.gate_radius)
-                self._tracker_radius = (self.tracker, radius)
-            r = self._tracker_radius[1]
-        return r if self.max_radius is None else min(r, self.max_radius)
+            r = np.full(uids.size, self._radius)
+        else:
+            r = search_radii(self.tracker, uids, self.bank.gate_radius, gates)
+        return r if self.max_radius is None else np.minimum(r, self.max_radius)
 
     def search(self, frame: Image) -> RescueFn:
         """``search(uids, predicted_xy, wh) -> (found, xy, score)`` on ``frame``: the bank's
-        NCC search in the gate (:meth:`TemplateBank.rescue`), with the best NCC of each track
-        (NaN where it was not searched)."""
-        bank, radius = self.bank, self.gate_radius
+        NCC search of each track within its radius (:meth:`radii`,
+        :meth:`TemplateBank.rescue`), with the best NCC of each track (NaN where it was not
+        searched)."""
+        bank = self.bank
+        frame_gates: list[Any] = []  # the tracker's gates of this frame, read once
 
         def search(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any, Any]:
-            return bank.rescue(frame, uids, predicted_xy, wh, radius)
+            if self._radius is None and not frame_gates and hasattr(self.tracker, "gates"):
+                frame_gates.append(self.tracker.gates())
+            gates = frame_gates[0] if frame_gates else None
+            return bank.rescue(frame, uids, predicted_xy, wh, self.radii(uids, gates))
 
         return search
 

@@ -73,8 +73,8 @@ def track_to_folder(
       ``settings.coasting`` (``--coasting``);
     - ``tracks.mp4`` — the annotated video (unless ``settings.video`` is False): boxes in
       their state colour, IDs, trails and the gates the tracker applies to the next frame
-      (:meth:`~mvtrack.tracking.Tracker.gates`: ellipses or circles, stretched for large
-      boxes; the second stage's gates dimmer);
+      (:meth:`~mvtrack.tracking.Tracker.gates`: the filter's innovation ellipses by
+      default, circles for the Euclidean gate);
     - ``trajectories.png`` — every track's path over the first frame;
     - ``summary.json`` — frames, tracks, states histogram, ``processing_speed`` (frames
       processed per second; ``video_fps`` is the frame rate), settings, ``ended_early``;

@@ -85,8 +85,9 @@ class TrackStats:
     Parameters
     ----------
     gap : int or None
-        Frames of absence after which a track has ended (``max_misses`` of the tracker's
-        :meth:`~mvtrack.tracking.TrackerConfig.frames`); ``None``: never (every track kept).
+        Frames of absence after which a track has ended (the tracker's
+        :attr:`~mvtrack.tracking.TrackerConfig.max_misses`); ``None``: never (every track
+        kept).
     """
 
     def __init__(self, gap: int | None) -> None:

@@ -8,8 +8,8 @@ The gate of a track is the region ``{z : (z - c)ᵀ C⁻¹ (z - c) ≤ r²}`` ar
 position ``c``: a circle of radius ``r`` for the Euclidean gate (eq. 8 of paper 2, circular mask
 of paper 1 §1.1) with ``C = I``, an axis-aligned ellipse for the uncoupled gate (eq. 9 of paper 2,
 ``C = diag(P̄x, P̄y)``), the rotated coupled region (SPEC §2.3) or the Mahalanobis χ² gate
-(``C = S``), each stretched as the tracker stretches it: the regions come from
-:meth:`mvtrack.tracking.Tracker.gates` (:class:`mvtrack.association.regions.GateRegions`).
+(``C = S = P̄ + R``, the default), as the tracker applies them: the regions come from
+:meth:`mvtrack.tracking.Tracker.gates` (:class:`mvtrack.association.gate.GateRegions`).
 :func:`gate_ellipses` turns ``(C, r²)`` into semi-axes and an angle.
 """
 
@@ -43,8 +43,6 @@ STATE_LABELS: dict[int, str] = {
 }
 #: colour of the gate outlines (BGR, yellow)
 GATE_COLOR: tuple[int, int, int] = (0, 230, 255)
-#: colour of the second-stage gate circles (BGR, dim yellow)
-OUTER_GATE_COLOR: tuple[int, int, int] = (0, 120, 140)
 #: palette of trail colours, chosen by ``track_id % len(TRAIL_PALETTE)``
 TRAIL_PALETTE: NDArray[np.uint8] = np.array(
     [
@@ -279,8 +277,6 @@ def annotate_frame(
     gate_center: FloatArray | None = None,
     gate_cov: FloatArray | None = None,
     gate_r2: float | FloatArray | None = None,
-    outer_r2: float | FloatArray | None = None,
-    outer_cov: FloatArray | None = None,
     text: Sequence[str] = (),
 ) -> NDArray[np.uint8]:
     """A copy of ``frame`` (BGR or grey) with trails, gates, boxes, IDs and a text header.
@@ -295,20 +291,12 @@ def annotate_frame(
         Recent positions (push ``tracks`` into it before calling).
     gate_center, gate_cov, gate_r2 : optional
         Gate regions to draw (see :func:`draw_gates`); skipped when ``gate_cov`` is None.
-    outer_r2, outer_cov : optional
-        A second gate around the same centres (the tracker's second association stage),
-        drawn dimmer: ``r²`` and shapes (default ``I``, circles of radius ``sqrt(outer_r2)``).
     text : sequence of str
         Lines written at the top left (frame number, settings).
     """
     img = frame.copy() if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
     if trails is not None:
         draw_trails(img, trails)
-    if gate_center is not None and outer_r2 is not None:
-        if outer_cov is None:
-            n = np.asarray(gate_center).reshape(-1, 2).shape[0]
-            outer_cov = np.broadcast_to(np.eye(2), (n, 2, 2))
-        draw_gates(img, gate_center, outer_cov, outer_r2, color=OUTER_GATE_COLOR)
     if gate_cov is not None and gate_center is not None and gate_r2 is not None:
         draw_gates(img, gate_center, gate_cov, gate_r2)
     h, w = img.shape[:2]
