@@ -8,11 +8,13 @@ resolve_gate`) and rule: the gate (``Gate.build(distance, view, gate).pairs(dxy,
 the assignment of its pairs (:func:`mvtrack.association.assign`, the tracker's cost ``u`` of
 an unmatched pair: the gate), and the tracker's whole association of a frame in one compiled
 call (:func:`mvtrack.association.assign.associate`: the default gate with its size term,
-every detection in the first stage). Prints the median over repeats in ms per frame, and (with
-``--md``) writes the Markdown table.
+every detection in the first stage), and the same call with the ``iou`` gate (its pairs found
+among overlapping boxes). Prints the median over repeats in ms per frame, and (with ``--md``)
+writes the Markdown table; ``--previous`` puts the totals of an earlier run's table (the
+Markdown this script wrote, for example before a change) beside today's, with their ratios.
 
     python benchmarks/bench_association.py [--sizes 10 100 1000 10000]
-        [--md docs/bench/association.md]
+        [--md docs/bench/association.md] [--previous old.md]
 """
 
 from __future__ import annotations
@@ -139,13 +141,38 @@ def _growth(rows: list[tuple]) -> list[str]:
     return out
 
 
+def _ratio(was: float, now: float) -> str:
+    if not (np.isfinite(was) and np.isfinite(now)) or now <= 0:
+        return "–"
+    return f"×{was / now:,.1f}" if was / now < 100 else f"×{was / now:,.0f}"
+
+
+def _previous(path: Path) -> dict[tuple[int, str, str], tuple[float, float]]:
+    """The gate and total ms of each (N, distance, rule) row of a table this script wrote."""
+    out: dict[tuple[int, str, str], tuple[float, float]] = {}
+    for line in path.read_text(encoding="utf-8").splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 11 or not cells[0].isdigit():
+            continue
+
+        def num(text: str) -> float:
+            return float("nan") if text in ("–", "") else float(text)
+
+        out[int(cells[0]), cells[2], cells[3]] = (num(cells[7]), num(cells[9]))
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[10, 100, 1000, 10000])
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--md", type=Path, default=None, help="write the Markdown table here")
+    ap.add_argument("--previous", type=Path, default=None,
+                    help="an earlier run's Markdown table: its gate and total times beside "
+                    "today's, with the ratios")
     args = ap.parse_args()
+    previous = _previous(args.previous) if args.previous is not None else {}
 
     rows = []
     for n in args.sizes:
@@ -170,18 +197,20 @@ def main() -> None:
             name = dist + (" + size term" if size_w else "")
             rows.append(_row(n, m, name, rule, ti, dj, len(a), t_gate, t_assign,
                              w_gate + w_assign))
-        # the tracker's association of a frame: one compiled call (pairs and assignment)
-        g = resolve_gate("mahalanobis")
-        gate = Gate.build("mahalanobis", view, g, size_weight=SIZE_W)
+        # the tracker's association of a frame: one compiled call (pairs and assignment),
+        # with the default gate and with the iou gate (its pairs among overlapping boxes)
         dclass = np.full(m, HIGH, dtype=np.int8)
-        call = (gate.view.xy, gate.cov, np.zeros((0, 0)), gate.view.wh,
-                np.ascontiguousarray(dets.xy), np.ascontiguousarray(dets.wh), dclass, g,
-                SIZE_W, RULE_CODES["optimal"])
-        matched = int((associate(*call) >= 0).sum())
-        t_frame, w_frame = _median_ms(args.repeats, associate, *call)
-        ti, dj, _ = gate.pairs(dets.xy, dets.wh)
-        rows.append(_row(n, m, "mahalanobis + size term", "associate (one call)", ti, dj,
-                         matched, float("nan"), float("nan"), w_frame, total=t_frame))
+        for dist in ("mahalanobis", "iou"):
+            g = resolve_gate(dist)
+            gate = Gate.build(dist, view, g, size_weight=SIZE_W)
+            call = (gate.view.xy, gate.cov, np.zeros((0, 0)), gate.view.wh,
+                    np.ascontiguousarray(dets.xy), np.ascontiguousarray(dets.wh), dclass, g,
+                    SIZE_W, RULE_CODES["optimal"], gate.search)
+            matched = int((associate(*call) >= 0).sum())
+            t_frame, w_frame = _median_ms(args.repeats, associate, *call)
+            ti, dj, _ = gate.pairs(dets.xy, dets.wh)
+            rows.append(_row(n, m, f"{dist} + size term", "associate (one call)", ti, dj,
+                             matched, float("nan"), float("nan"), w_frame, total=t_frame))
     if args.md is not None:
         from mvtrack.io.atomic import write_text
 
@@ -198,15 +227,23 @@ def main() -> None:
             "figures are indicative.",
             "",
             "Command: `python benchmarks/bench_association.py --sizes "
-            + " ".join(str(n) for n in args.sizes) + f" --repeats {args.repeats} --md {args.md}`",
+            + " ".join(str(n) for n in args.sizes) + f" --repeats {args.repeats} --md {args.md}"
+            + (f" --previous {args.previous}`" if previous else "`"),
             "",
             "| N | M | distance | rule | gated pairs | largest cluster | matched | gate ms "
-            "| assign ms | total ms | wall total ms |",
-            "|---|---|---|---|---|---|---|---|---|---|---|",
+            "| assign ms | total ms | wall total ms |"
+            + (" previous gate / total ms | previous / today, gate / total |" if previous
+               else ""),
+            "|---|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if previous else ""),
         ]
         for r in rows:
-            lines.append("| " + " | ".join(
-                [str(x) for x in r[:7]] + [_ms(x) for x in r[7:]]) + " |")
+            cells = [str(x) for x in r[:7]] + [_ms(x) for x in r[7:]]
+            if previous:
+                was = previous.get((r[0], r[2], r[3]))
+                cells += ["–", "–"] if was is None else [
+                    f"{_ms(was[0])} / {_ms(was[1])}",
+                    f"{_ratio(was[0], r[7])} / {_ratio(was[1], r[9])}"]
+            lines.append("| " + " | ".join(cells) + " |")
         lines += [
             "",
             "*associate (one call)*: the tracker's association of a frame, pairs and assignment",
@@ -218,9 +255,20 @@ def main() -> None:
             "and a larger one with SciPy, so its time grows with the clusters. The quadratic",
             "gates (euclidean, mahalanobis, coupled) find their pairs through a grid of",
             "detection cells (`mvtrack.association.pairs`), so their time grows with the pairs;",
-            "`iou` (and `coupled-literal`) is not a quadratic form about the prediction and is",
-            "evaluated as a dense N × M matrix (`Gate.matrix`), so its time grows with N × M.",
+            "`iou` finds its pairs among the boxes that overlap (a grid of cells the size of",
+            "the median box, `pairs.overlap_pairs`), so its time grows with the pairs too",
+            "(`coupled-literal`, not timed here, is a dense N × M matrix, `Gate.dense`).",
+            "`euclidean` here is the pixel gate of 100 px² (10 px; `resolve_gate`), as the",
+            "`paper1` preset's 20 px circle: the tracker's Euclidean gate without a gate is in",
+            "box sizes (`docs/association.md`), the same search.",
         ]
+        if previous:
+            lines += [
+                "",
+                f"*previous*: the gate and total CPU times of `{args.previous}`, an earlier run",
+                "of this script on the same scenes (same seed); *previous / today*: how many",
+                "times faster today's is (below 1: slower).",
+            ]
         lines += _growth(rows)
         write_text(args.md, "\n".join(lines) + "\n")
         print(f"wrote {args.md}")

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 from mvtrack import registry
-from mvtrack.association.pairs import matrix_pairs, quadratic_pairs
+from mvtrack.association.pairs import BY_QUADRATIC, frame_pairs
 from mvtrack.jit import kernel, python_call
 
 IntArray = NDArray[np.intp]
@@ -211,7 +211,7 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
 @kernel
 def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
               dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8], gate: float,
-              size_w: float, rule: int) -> IntArray:
+              size_w: float, rule: int, search: int = BY_QUADRATIC) -> IntArray:
     """The detection of every track in one frame (−1: none), in two stages by score.
 
     Parameters
@@ -219,8 +219,8 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
     cx, S : (N, 2), (N, 3)
         Gate centres and covariances (:class:`mvtrack.association.gate.Gate`).
     cost : (N, M) or (0, 0)
-        A cost matrix for the gates that are not quadratic (``iou``, ``coupled-literal``);
-        empty for the quadratic ones.
+        The cost matrix of a gate searched in it (``coupled-literal``,
+        :meth:`mvtrack.association.gate.Gate.dense`); empty for the others.
     twh, dxy, dwh : (N, 2), (M, 2), (M, 2)
         Track box sizes, detection centres and sizes.
     dclass : (M,) int8
@@ -229,6 +229,10 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
     gate, size_w, rule
         The gate on the value, the weight of the size term and the rule
         (:data:`RULE_CODES`).
+    search : int
+        How the pairs are found (:func:`mvtrack.association.pairs.frame_pairs`; the
+        gate's :attr:`~mvtrack.association.gate.Gate.search`): about each centre (default),
+        among overlapping boxes (``iou``) or in ``cost``.
     """
     n, m = cx.shape[0], dxy.shape[0]
     det_index = np.full(n, -1, np.intp)
@@ -242,10 +246,7 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
                 tsel[i] = det_index[i] < 0
         if not dsel.any() or not tsel.any():
             continue
-        if cost.shape[0] == n and cost.shape[1] == m and n > 0:
-            ti, dj, c = matrix_pairs(cost, tsel, dsel, gate)
-        else:
-            ti, dj, c = quadratic_pairs(cx, S, twh, tsel, dxy, dwh, dsel, gate, size_w)
+        ti, dj, c = frame_pairs(search, cx, S, cost, twh, tsel, dxy, dwh, dsel, gate, size_w)
         solve(ti, dj, c, n, m, rule, gate, det_index)
     return det_index
 

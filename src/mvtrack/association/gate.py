@@ -20,9 +20,11 @@ prediction (:func:`shapes`):
   σ² = (P̄x + P̄y)/2, θ the direction of the predicted velocity (eq. (9)'s ellipse where the
   speed is below ``min_speed``).
 
-``iou`` (``1 − IoU`` of the predicted and the detected box) and ``coupled-literal`` (eq. (10)
-as printed, not a region about the prediction, E2.7) are given to the assignment as a cost
-matrix (:meth:`Gate.matrix`) and are drawn as nothing.
+``iou`` (``1 − IoU`` of the predicted and the detected box) finds its pairs among the boxes
+that overlap (:func:`mvtrack.association.pairs.overlap_pairs`: a pair of disjoint boxes has
+the value 1, outside any gate below 1); ``coupled-literal`` (eq. (10) as printed, not a region
+about the prediction, E2.7) is given to the assignment as a cost matrix (:meth:`Gate.matrix`).
+Neither is drawn.
 
 The size term (``w_s = 1 / σ_s²``, σ_s the standard deviation of the log ratio of a track's
 box sizes from frame to frame) ranks and gates a pair by its box as well as its position: a
@@ -38,13 +40,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.association.distances import get_distance
-from mvtrack.association.pairs import matrix_pairs, quadratic_pairs
+from mvtrack.association.pairs import BY_MATRIX, BY_OVERLAP, BY_QUADRATIC, frame_pairs
 from mvtrack.association.view import TrackView
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-__all__ = ["QUADRATIC", "SHAPE_PARAMS", "Gate", "GateRegions", "shapes", "warmup_centre"]
+__all__ = [
+    "QUADRATIC",
+    "SHAPE_PARAMS",
+    "Gate",
+    "GateRegions",
+    "shapes",
+    "warmup_centre",
+]
 
 #: the distances whose gate is a quadratic form about the prediction
 QUADRATIC = ("mahalanobis", "euclidean", "uncoupled", "coupled")
@@ -188,11 +197,20 @@ class Gate:
         """Whether the gate is a quadratic form about the prediction."""
         return self.distance in QUADRATIC
 
-    def matrix(self, dxy: FloatArray, dwh: FloatArray) -> FloatArray:
-        """The gate's value of every track and detection (N, M), without the size gate.
+    @property
+    def search(self) -> int:
+        """How its pairs are found (:func:`mvtrack.association.pairs.frame_pairs`): about
+        each prediction (the quadratic gates), among overlapping boxes (``iou``) or in the
+        cost matrix (``coupled-literal``)."""
+        if self.quadratic:
+            return BY_QUADRATIC
+        return BY_OVERLAP if self.distance == "iou" else BY_MATRIX
 
-        The assignment computes the quadratic gates itself; this is the cost matrix of the
-        others and the reference the tests check the kernel against.
+    def matrix(self, dxy: FloatArray, dwh: FloatArray) -> FloatArray:
+        """The gate's value of every track and detection (N, M), the size term included.
+
+        The reference the tests check the pair searches against, and the cost matrix of the
+        gate that has no search of its own (:meth:`dense`).
         """
         n, m = len(self.view), dxy.shape[0]
         ti, dj = np.divmod(np.arange(n * m), max(m, 1))
@@ -210,6 +228,13 @@ class Gate:
             value = value + self.size_weight * (lr**2).sum(axis=1)
         return np.asarray(value, dtype=np.float64).reshape(n, m)
 
+    def dense(self, dxy: FloatArray, dwh: FloatArray) -> FloatArray:
+        """The cost matrix the assignment needs (:func:`mvtrack.association.assign.associate`):
+        :meth:`matrix` for a gate searched in it, else an empty (0, 0) one."""
+        if self.search != BY_MATRIX:
+            return np.zeros((0, 0))
+        return np.ascontiguousarray(self.matrix(dxy, dwh))
+
     def pairs(self, dxy: FloatArray, dwh: FloatArray) -> tuple[NDArray[np.intp],
                                                              NDArray[np.intp], FloatArray]:
         """The candidate pairs ``(ti, dj, value)`` of the tracks and detections at ``dxy``
@@ -219,10 +244,9 @@ class Gate:
         tsel, dsel = np.ones(n, bool), np.ones(m, bool)
         dxy = np.ascontiguousarray(dxy, dtype=np.float64)
         dwh = np.ascontiguousarray(dwh, dtype=np.float64)
-        if self.quadratic:
-            return quadratic_pairs(self.view.xy, self.cov, self.view.wh, tsel, dxy, dwh, dsel,
-                                   self.threshold, self.size_weight)
-        return matrix_pairs(self.matrix(dxy, dwh), tsel, dsel, self.threshold)
+        return frame_pairs(self.search, self.view.xy, self.cov, self.dense(dxy, dwh),
+                           self.view.wh, tsel, dxy, dwh, dsel, self.threshold,
+                           self.size_weight)
 
     def regions(self, uid: IntArray, track_id: IntArray) -> GateRegions:
         """The regions to draw (the position part: the size term only narrows them)."""

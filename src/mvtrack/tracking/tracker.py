@@ -164,7 +164,6 @@ class Tracker:
             ScoreCalibration(c.score_scale)
             if c.score_high is not None or c.min_score > 0 else None
         )
-        self._no_cost = np.zeros((0, 0))
         self.reset()
 
     def reset(self) -> None:
@@ -254,10 +253,9 @@ class Tracker:
         else:
             ps = self._predict(ps, tab)
             gate = self._gate(ps, tab, self._k)
-            cost = self._no_cost if gate.quadratic else gate.matrix(dets.xy, dets.wh)
-            det_index = associate(gate.view.xy, gate.cov, np.ascontiguousarray(cost), wh,
+            det_index = associate(gate.view.xy, gate.cov, gate.dense(dets.xy, dets.wh), wh,
                                   dets.xy, dets.wh, dclass, gate.threshold, gate.size_weight,
-                                  self._rule)
+                                  self._rule, gate.search)
             centre, c = gate.view.xy, gate.view.cov
             std = np.sqrt(np.stack([c[:, 0, 0], c[:, 1, 1]], axis=1))
         unmatched = ((det_index < 0) & (tab.ints[:, STATE] != TENTATIVE)).nonzero()[0]
