@@ -452,13 +452,37 @@ def test_sparse_sobel_equals_opencvs() -> None:
 
 def test_ghost_of_the_first_frames_is_reset() -> None:
     """An object in the bootstrap background that has left is a ghost: its outline has the
-    background's edges and none of the frame's; it is reset within ``ghost_every`` frames."""
+    background's edges and none of the frame's, and it stays where it is; it is reset at the
+    first test after it has stood still for ``ghost_every`` frames (as the count of busy
+    frames, updated every ``refresh`` frames, tells)."""
     bg = np.full((40, 60, 3), 100, np.uint8)
     with_car = bg.copy()
     with_car[10:20, 20:35] = (30, 40, 60)  # a dark car (the test reads grey-level edges)
-    model = ColourBackground(ghost_every=2)
+    model = ColourBackground(ghost_every=2, refresh=8)
     model.bootstrap(with_car)  # the car stood in the first frames, then drove off
-    masks = [model.apply(bg).copy() for _ in range(3)]
+    masks = [model.apply(bg).copy() for _ in range(10)]
     assert masks[0][11:19, 21:34].mean() > 250  # the ghost, before the test
+    assert masks[7][11:19, 21:34].mean() > 250  # not yet known to stand still
     assert masks[-1].max() == 0  # reset
     assert np.allclose(model.mean[10:20, 20:35], 100.0)
+
+
+def test_an_object_moving_over_a_textured_background_is_not_reset_as_a_ghost() -> None:
+    """A dark walker crossing a row of bicycles (a background with strong edges everywhere)
+    has the background's edges on his outline, as a ghost has; but he moves, so his pixels
+    are never busy for ``ghost_every`` frames in a row: nothing of him enters the
+    background (without that condition he was copied into it, a ghost of him left behind)."""
+    rng = np.random.default_rng(0)
+    bg = np.full((60, 120, 3), 110, np.uint8)
+    bg[:, ::4] = 20  # vertical stripes: edges everywhere
+    bg[:, 1::4] = 200
+    model = ColourBackground(ghost_every=10, refresh=2, shadows=False)
+    model.bootstrap(bg)
+    for k in range(40):
+        frame = bg.copy()
+        x = 5 + 2 * k  # a flat dark walker, 12 px wide, 2 px a frame
+        frame[15:50, x : x + 12] = 35
+        frame = np.clip(frame.astype(int) + rng.integers(-2, 3, frame.shape), 0, 255).astype(
+            np.uint8)
+        model.apply(frame)
+    assert np.abs(model.mean.astype(float) - bg).max() < 20  # no walker in the background

@@ -229,6 +229,7 @@ def run_frames(
     prepare = getattr(detector, "prepare", None)
     iterator: Iterator[Image] = iter(prepare(frames) if prepare is not None else frames)
     observe = getattr(detector, "observe", None)
+    shown = getattr(detector, "shown", None)
     k = 0
     try:
         while max_frames is None or k < max_frames:
@@ -253,6 +254,8 @@ def run_frames(
             if relink is not None:
                 live = getattr(getattr(tracker, "tracks", None), "track_id", None)
                 tracks = relink(image, tracks, live)
+            if shown is not None:
+                tracks = shown(tracks)
             if keep:
                 result.tracks.append(tracks)
                 result.scores.append(shown_scores(rescuer, relink))
