@@ -171,7 +171,7 @@ class RoadUserDetector:
         # which of the tracker's tracks have travelled (by the tracker's IDs), and which of
         # the tracks shown have (by the IDs shown)
         self.travel = Travel(travel)
-        self._shown = Travel(travel, inherit=True)
+        self._shown = Travel(travel)
         #: the boxes the tracker predicts for the next frame of its confirmed tracks that
         #: have travelled (for blobs that several tracks share, and held)
         self.predicted: FloatArray | None = None
@@ -271,7 +271,8 @@ class RoadUserDetector:
         """After each tracker step: keep the boxes predicted for the next frame of the
         confirmed tracks that have travelled, and learn the kinds from their detections
         (blobs as found, isolated, off the border)."""
-        moved = self.travel.update(tracks) & (tracks.state != int(TrackState.DELETED))
+        size = None if self._shape is None else (self._shape[1], self._shape[0])
+        moved = self.travel.update(tracks, size) & (tracks.state != int(TrackState.DELETED))
         xy = tracks.filtered_xy[moved] + tracks.velocity[moved]
         self.predicted = np.column_stack([xy - tracks.wh[moved] / 2, tracks.wh[moved]])
         if not self.learn_kinds or not moved.any() or len(dets) == 0:
@@ -288,7 +289,8 @@ class RoadUserDetector:
         """The rows of ``tracks`` (IDs as shown) whose tracks have travelled: a track is shown
         from its first row ``travel`` box sizes from where it was born
         (:class:`~mvtrack.detection.travel.Travel`)."""
-        keep = self._shown.update(tracks)
+        size = None if self._shape is None else (self._shape[1], self._shape[0])
+        keep = self._shown.update(tracks, size)
         if keep.all():
             return tracks
         return take_rows(tracks, keep)

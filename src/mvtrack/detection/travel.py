@@ -12,12 +12,9 @@ measurement, or the filter's position without one) lies ``reach`` box sizes from
 
 and stays so. Distances are in the track's own box sizes (the same test for a car that crosses
 the picture and a walker far away); ``reach`` is :math:`\rho`. A track that waits after it
-arrived (a car at a red light) has travelled.
-
-With ``inherit``, a track born inside the box of a track that has travelled, in the same or
-the previous frame, has travelled from its first row: it continues an object that arrived
-moving (one of two walkers whose shared track splits, a walker whose track was lost as he
-turned round).
+arrived (a car at a red light) has travelled. A track whose first box touches the image's
+border has come into the view from outside it: it has travelled from its first row (a car
+entering the picture shows only its front, whose box grows more than its centre moves).
 """
 
 from __future__ import annotations
@@ -37,18 +34,14 @@ class Travel:
     ----------
     reach : float, default 0.5
         :math:`\\rho`, box sizes from the anchor (0: every track has travelled at once).
-    inherit : bool, default False
-        A track born inside the box of a travelled track has travelled.
     """
 
-    def __init__(self, reach: float = 0.5, inherit: bool = False) -> None:
+    def __init__(self, reach: float = 0.5) -> None:
         if not (np.isfinite(reach) and reach >= 0):
             raise ValueError(f"reach must be a number >= 0, got {reach}")
         self.reach = float(reach)
-        self.inherit = bool(inherit)
         self._anchor = np.full((1, 2), np.nan)  # track ID -> anchor (NaN: not seen)
         self._done = np.zeros(1, bool)  # track ID -> travelled
-        self._boxes = np.zeros((0, 4))  # the travelled tracks' boxes of the previous frame
 
     def _grow(self, n: int) -> None:
         if n <= self._done.size:
@@ -58,9 +51,11 @@ class Travel:
                                                              np.nan)])
         self._done = np.concatenate([self._done, np.zeros(m - self._done.size, bool)])
 
-    def update(self, tracks: TrackFrame) -> BoolArray:
+    def update(self, tracks: TrackFrame, size: tuple[int, int] | None = None) -> BoolArray:
         """Follow the rows of ``tracks``; whether each row's track has travelled (rows
-        without a public ID, ``track_id <= 0``, have not)."""
+        without a public ID, ``track_id <= 0``, have not). With the image's ``size``
+        (W, H), a track whose first box touches the image's border came in from outside
+        the view: it has travelled."""
         ids = np.asarray(tracks.track_id, np.int64)
         out = np.zeros(ids.size, bool)
         pub = ids > 0
@@ -76,16 +71,12 @@ class Travel:
         wh = tracks.wh[pub]
         far = (np.abs(pos - self._anchor[tid]) >= self.reach * wh).any(axis=1)
         self._done[tid[far]] = True
-        box = np.column_stack([tracks.filtered_xy[pub] - wh / 2, wh])
-        if self.inherit and new.any():  # born inside a travelled track's box, now or a frame ago
-            seen = np.concatenate([self._boxes, box[self._done[tid] & ~new]])
-            a = self._anchor[tid[new]]
-            lo, hi = seen[None, :, :2], seen[None, :, :2] + seen[None, :, 2:]
-            inside = ((a[:, None, :] >= lo) & (a[:, None, :] <= hi)).all(axis=2).any(axis=1)
-            self._done[tid[new][inside]] = True
-        done = self._done[tid]
-        self._boxes = box[done]
-        out[pub] = done
+        if size is not None and new.any():  # born at the border: came in from outside
+            b = np.column_stack([tracks.filtered_xy[pub][new] - wh[new] / 2, wh[new]])
+            edge = (b[:, 0] < 1.5) | (b[:, 1] < 1.5) | (b[:, 0] + b[:, 2] > size[0] - 2.5) | (
+                b[:, 1] + b[:, 3] > size[1] - 2.5)
+            self._done[tid[new][edge]] = True
+        out[pub] = self._done[tid]
         return out
 
     def travelled(self, ids: NDArray[np.integer]) -> BoolArray:
