@@ -40,11 +40,17 @@ Usage::
     python benchmarks/bench_vehicles.py --out /tmp/vehicles --no-speed     # accuracy only
     python benchmarks/bench_vehicles.py --out /tmp/vehicles --pictures docs/images/vehicles
     python benchmarks/bench_vehicles.py --out /tmp/vehicles --loo          # constants, LOO
+    python benchmarks/bench_vehicles.py --out /tmp/loo --no-accuracy --no-speed --loo-e2e
+    python benchmarks/bench_vehicles.py --out /tmp/people --no-accuracy --no-speed --people
 
 ``--loo`` chooses the road-user front end's constants (one at a time, from a small grid each)
 by leave-one-out over the four clips and KITTI-17 (people, scored on its own front-end boxes at
 IoU 0.5 against ``gt.txt`` with flag-0 rows dropped): for each held-out sequence, the value
-with the best mean front-end F1 on the others, and its F1 on the held-out one.
+with the best mean front-end F1 on the others, and its F1 on the held-out one. ``--loo-e2e``
+does the same for the constants of :data:`LOO_E2E_GRID`, scored on the end-to-end rows
+(``results.txt``), since the travel a track needs before it is shown acts on them only.
+``--people``: KITTI-17 end to end with every default, as ``mvtrack track KITTI-17/img1 --fps
+10`` and ``mvtrack eval --ignore drop`` score it (MOTA, IDF1).
 """
 
 from __future__ import annotations
@@ -86,6 +92,15 @@ LOO_GRID: dict[str, tuple[float, ...]] = {
     "over": (1.3, 1.5, 1.8),
     "close_frac": (0.2, 0.3, 0.4),
     "max_z": (2.0, 2.5, 3.0),
+}
+
+#: the constants chosen by leave-one-out on the end-to-end rows (``--loo-e2e``): the
+#: distance a track travels before it is shown, held and learnt from, the flat wings' height,
+#: the clutter's share of the smallest kind
+LOO_E2E_GRID: dict[str, tuple[float, ...]] = {
+    "travel": (0.25, 0.5, 1.0),
+    "wings": (0.2, 0.3, 0.4),
+    "small": (0.2, 0.35, 0.5),
 }
 
 
@@ -413,24 +428,51 @@ def speed(args: argparse.Namespace, work: Path) -> dict[str, Any]:
 # --------------------------------------------------------------------------- leave-one-out
 
 
-def kitti_frontend_f1(frames: list[np.ndarray], params: dict[str, Any], work: Path) -> float:
-    """F1 at IoU 0.5 of the road-user front end's own boxes on KITTI-17 (flag-0 rows out)."""
+def kitti_f1(per_frame: list[np.ndarray]) -> float:
+    """F1 at IoU 0.5 of boxes (tlwh per frame) on KITTI-17: flag-1 rows are the truth, and a
+    box left unmatched that matches a flag-0 row (a person to ignore) is not counted, as
+    ``mvtrack eval --ignore drop`` does."""
     from scipy.optimize import linear_sum_assignment
 
-    got = run_mvtrack(frames, "road-users", work, params, fps=10.0)
     gt = np.loadtxt(KITTI / "gt.txt", delimiter=",", ndmin=2)
-    gt = gt[gt[:, 6] != 0]
     tp = fp = fn = 0
-    for k, r in enumerate(got["frontend"]):
-        g = gt[gt[:, 0] == k + 1, 2:6]
-        t = 0
+    for k, r in enumerate(per_frame):
+        rows = gt[gt[:, 0] == k + 1]
+        g, ignored = rows[rows[:, 6] != 0, 2:6], rows[rows[:, 6] == 0, 2:6]
+        matched = np.zeros(len(r), bool)
         if len(g) and len(r):
             c = iou(g, r)
             i, j = linear_sum_assignment(-c)
-            t = int((c[i, j] >= 0.5).sum())
-        tp, fp, fn = tp + t, fp + len(r) - t, fn + len(g) - t
+            matched[j[c[i, j] >= 0.5]] = True
+        rest = r[~matched]
+        if len(ignored) and len(rest):
+            rest = rest[~(iou(rest, ignored) >= 0.5).any(axis=1)]
+        t = int(matched.sum())
+        tp, fp, fn = tp + t, fp + len(rest), fn + len(g) - t
     rec, pre = tp / max(tp + fn, 1), tp / max(tp + fp, 1)
     return 2 * rec * pre / max(rec + pre, 1e-12)
+
+
+def kitti_frontend_f1(frames: list[np.ndarray], params: dict[str, Any], work: Path) -> float:
+    """F1 at IoU 0.5 of the road-user front end's own boxes on KITTI-17 (:func:`kitti_f1`)."""
+    return kitti_f1(run_mvtrack(frames, "road-users", work, params, fps=10.0)["frontend"])
+
+
+def kitti_end_to_end(frames: list[np.ndarray], work: Path,
+                     params: dict[str, Any] | None = None) -> dict[str, float]:
+    """``mvtrack track KITTI-17/img1 --fps 10`` (the default front end) scored as ``mvtrack
+    eval --ignore drop``: MOTA, IDF1, precision, recall, and the F1 of :func:`kitti_f1` of
+    its rows and of the front end's boxes."""
+    from mvtrack.eval.metrics import score_sequence
+
+    got = run_mvtrack(frames, "road-users", work, params, fps=10.0)
+    s = score_sequence(KITTI / "gt.txt", work / "results.txt", 0.5, ignore="drop",
+                       with_hota=False).as_dict()
+    out = {k: float(s[k]) for k in ("MOTA", "IDF1", "precision", "recall")}
+    out.update({k: int(s[k]) for k in ("FP", "FN", "IDSW")})
+    out["f1"] = kitti_f1(got["results"])
+    out["frontend_f1"] = kitti_f1(got["frontend"])
+    return out
 
 
 def leave_one_out(args: argparse.Namespace, work: Path) -> dict[str, Any]:
@@ -438,7 +480,7 @@ def leave_one_out(args: argparse.Namespace, work: Path) -> dict[str, Any]:
     seqs: dict[str, Any] = {clip: (read_frames(VEHICLES / clip / "img1"), Truth(VEHICLES / clip))
                             for clip in CLIPS}
     if KITTI.exists():
-        seqs["KITTI-17"] = (read_frames(KITTI / "img1"), None)
+        seqs["KITTI-17"] = (read_kitti(), None)
     out: dict[str, Any] = {}
     for name, grid in LOO_GRID.items():
         f1: dict[float, dict[str, float]] = {}
@@ -461,6 +503,48 @@ def leave_one_out(args: argparse.Namespace, work: Path) -> dict[str, Any]:
         print(f"loo {name}: " + ", ".join(f"{h}: {d['chosen']} ({d['held_out_f1']:.3f})"
                                            for h, d in folds.items()), flush=True)
     return out
+
+
+def leave_one_out_e2e(args: argparse.Namespace, work: Path) -> dict[str, Any]:
+    """Each constant of :data:`LOO_E2E_GRID` chosen with one sequence held out, by the mean
+    end-to-end F1 at IoU 0.5 (the ``results.txt`` rows) on the others: the four clips
+    (``score_boxes.py``'s rules) and KITTI-17 (:func:`kitti_f1`); the other constants at
+    their defaults."""
+    seqs: dict[str, Any] = {clip: (read_frames(VEHICLES / clip / "img1"), Truth(VEHICLES / clip))
+                            for clip in CLIPS}
+    if KITTI.exists():
+        seqs["KITTI-17"] = (read_kitti(), None)
+    out: dict[str, Any] = {}
+    for name, grid in LOO_E2E_GRID.items():
+        f1: dict[float, dict[str, float]] = {}
+        for value in grid:
+            f1[value] = {}
+            for seq, (frames, truth) in seqs.items():
+                if truth is None:
+                    got = run_mvtrack(frames, "road-users", work / "k", {name: value}, fps=10.0)
+                    f1[value][seq] = kitti_f1(got["results"])
+                else:
+                    got = run_mvtrack(frames, "road-users", work / "l", {name: value})
+                    f1[value][seq] = truth.score(got["results"], 0.5)["f1"]
+            print(f"loo-e2e {name}={value}: " + " ".join(f"{s} {v:.3f}" for s, v in
+                                                       f1[value].items()), flush=True)
+        folds = {}
+        for held in seqs:
+            train = [s for s in seqs if s != held]
+            best = max(grid, key=lambda v: np.mean([f1[v][s] for s in train]))
+            folds[held] = {"chosen": best, "held_out_f1": f1[best][held]}
+        out[name] = {"grid": {str(v): f1[v] for v in grid}, "folds": folds}
+        print(f"loo-e2e {name}: " + ", ".join(f"{h}: {d['chosen']} ({d['held_out_f1']:.3f})"
+                                               for h, d in folds.items()), flush=True)
+    return out
+
+
+def read_kitti() -> list[np.ndarray]:
+    """The frames of KITTI-17 (10 fps)."""
+    from mvtrack.io.video import open_source
+
+    with open_source(str(KITTI / "img1"), fps=10.0, threads=1) as src:
+        return [frame for _, frame in src]
 
 
 # --------------------------------------------------------------------------- pictures
@@ -532,6 +616,9 @@ def main() -> None:
     ap.add_argument("--no-accuracy", action="store_true")
     ap.add_argument("--pictures", type=Path, default=None)
     ap.add_argument("--loo", action="store_true")
+    ap.add_argument("--loo-e2e", action="store_true")
+    ap.add_argument("--people", action="store_true",
+                    help="KITTI-17 end to end with the default front end (MOTA, IDF1)")
     ap.add_argument("--sort-side", nargs=2, metavar=("DETS", "OUT"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.sort_side:
@@ -553,6 +640,13 @@ def main() -> None:
             report["pictures"] = pictures(args.pictures, work)
         if args.loo:
             report["loo"] = leave_one_out(args, work)
+        if args.loo_e2e:
+            report["loo_e2e"] = leave_one_out_e2e(args, work)
+        if args.people and KITTI.exists():
+            report["kitti"] = kitti_end_to_end(read_kitti(), work / "kitti")
+            print("KITTI-17 end to end: " + ", ".join(
+                f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}"
+                for k, v in report["kitti"].items()), flush=True)
     (args.out / "vehicles.json").write_text(json.dumps(report, indent=1, default=float))
 
 

@@ -92,16 +92,24 @@ def stop_at_frame(monkeypatch: Any, n: int, stop: Any) -> None:
 
     real = run.build_detector
 
-    def build(settings: Any) -> Any:
-        det = real(settings)
-        calls = {"n": 0}
+    class Stopping:
+        """The front end, stopping at its ``n``-th frame; its other hooks (``prepare``,
+        ``observe``, ``shown``, ``mask`` ...) pass through, so the run is the same until then."""
 
-        def detect(frame: Any) -> Any:
-            calls["n"] += 1
-            if calls["n"] == n:
+        def __init__(self, det: Any) -> None:
+            self.__dict__["det"] = det
+            self.__dict__["calls"] = 0
+
+        def __getattr__(self, name: str) -> Any:
+            return getattr(self.__dict__["det"], name)
+
+        def __call__(self, frame: Any) -> Any:
+            self.__dict__["calls"] += 1
+            if self.__dict__["calls"] == n:
                 stop()
-            return det(frame)
+            return self.__dict__["det"](frame)
 
-        return detect
+    def build(settings: Any) -> Any:
+        return Stopping(real(settings))
 
     monkeypatch.setattr(run, "build_detector", build)

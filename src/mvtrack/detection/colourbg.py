@@ -372,10 +372,20 @@ class ColourBackground:
         :func:`~mvtrack.detection.ghosts.ghost_blobs` (the outline's edges are the
         background's, not the frame's), with the background's edges kept from the last
         refresh and the frame's computed on the outline pixels only, over a band two pixels
-        wide across each blob's border."""
-        n, labels = cv2.connectedComponents(fg, connectivity=8, ltype=cv2.CV_32S)
+        wide across each blob's border.
+
+        Only foreground that stood still since the previous test is looked at (pixels busy
+        for ``ghost_every`` frames in a row, as the count of the last refresh tells): a
+        ghost stays where it is, and an object that moves is never reset into the
+        background, however textured the background behind it (a walker in front of a row
+        of bicycles)."""
+        still = cv2.compare(self._run, float(max(self.ghost_every - self.refresh, 1)),
+                            cv2.CMP_GE)
+        fg_still = cv2.bitwise_and(fg, still)
+        n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_32S)
         if n <= 1:
             return
+        out, fg = fg, fg_still
         # the outline as a band across the blob's border (the neighbourhood test of eq. (1)
         # leaves a blob a pixel inside the object's edge), labelled by the nearest blob
         outline = cv2.subtract(cv2.dilate(fg, None), cv2.erode(fg, None))
@@ -400,7 +410,7 @@ class ColourBackground:
         sel = cv2.bitwise_and(ghost[labels], fg)
         # reset to the frame with the ring the neighbourhood test left out of the blob
         cv2.accumulateWeighted(img, self.mean, 1.0, mask=cv2.dilate(sel, None))
-        cv2.bitwise_and(fg, cv2.bitwise_not(sel), dst=fg)
+        cv2.bitwise_and(out, cv2.bitwise_not(sel), dst=out)
         cv2.bitwise_and(self._run, 0.0, dst=self._run, mask=sel)
         self._stale = True
 

@@ -38,29 +38,38 @@ FloatArray = NDArray[np.float64]
 
 
 def robust_plane(x: FloatArray, y: FloatArray, z: FloatArray, weight: FloatArray | None = None,
-                 iterations: int = 8, c: float = 4.685, ridge: float = 1e-3) -> FloatArray:
+                 iterations: int = 8, c: float = 4.685, ridge: float = 1e-3,
+                 relative: bool = False) -> FloatArray:
     """``(a, b, c)`` of ``z ≈ a + b x + c y`` by IRLS with Tukey's biweight.
 
     ``weight`` (default 1) multiplies each sample's IRLS weight. ``x`` and ``y`` are centred
     and scaled inside; ``ridge`` (relative to the total weight) pulls the slopes towards 0
     when the samples do not span both axes. Starts from weighted least squares.
+
+    ``relative``: the errors are proportional to ``z`` (sizes: a box is measured to a share
+    of its size, far and near alike), so the residuals are ``(z - ẑ) / z`` — least squares
+    with weights ``1 / z²`` — and their scale is the weighted median of their absolute
+    values: many small samples do not make the few large ones outliers.
     """
     prior = np.ones_like(z) if weight is None else np.asarray(weight, np.float64)
     mx, my = float(np.average(x, weights=prior)), float(np.average(y, weights=prior))
     sx, sy = float(np.std(x)) or 1.0, float(np.std(y)) or 1.0
     design = np.column_stack([np.ones_like(x), (x - mx) / sx, (y - my) / sy])
-    penalty = np.diag([0.0, ridge, ridge]) * prior.sum()
-    w = prior.copy()
+    unit = 1.0 / np.maximum(np.abs(z), 1e-12) if relative else np.ones_like(z)
+    base = prior * unit**2
+    penalty = np.diag([0.0, ridge, ridge]) * base.sum()
+    w = base.copy()
     coef = np.zeros(3)
     for _ in range(iterations):
         dw = design * w[:, None]
         coef = np.linalg.solve(dw.T @ design + penalty, dw.T @ z)
-        r = z - design @ coef
-        s = 1.4826 * float(np.median(np.abs(r)))
+        r = (z - design @ coef) * unit
+        a = np.abs(r)
+        s = 1.4826 * (_weighted_median(a, prior) if relative else float(np.median(a)))
         if s <= 1e-9:
             break
         u = r / (c * s)
-        w = prior * np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+        w = base * np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
     a, b1, c1 = coef
     return np.array([a - b1 * mx / sx - c1 * my / sy, b1 / sx, c1 / sy])
 
@@ -225,7 +234,7 @@ class KindModel:
         keep = np.ones(len(s), bool)
         for _ in range(3):  # alternate the scale law and the kinds
             plane = robust_plane(x[keep], y[keep], g[keep] / np.exp(size_of[labels[keep]]),
-                                 wt[keep])
+                                 wt[keep], relative=True)
             scale = self._clip_scale(plane, x, y, keep)
             norm = logwh - np.log(scale)[:, None]
             labels, keep, centres = self._cluster(norm, wt)
@@ -283,6 +292,18 @@ class KindModel:
         y = np.asarray(y, np.float64)
         s = self.plane[0] + self.plane[1] * x + self.plane[2] * y
         return np.clip(s, *self._range)
+
+    def standing(self, tlwh: ArrayLike) -> NDArray[np.bool_]:
+        """Whether each box ``tlwh`` (M, 4) stands below the horizon: the scale law of
+        eq. (1), not clipped, is positive at its bottom centre (the ground plane's inverse
+        depth vanishes on the horizon; nothing that stands on the ground has its foot above
+        it). True for every box while the model is not ready."""
+        b = np.asarray(tlwh, np.float64).reshape(-1, 4)
+        if not self.ready:
+            return np.ones(len(b), bool)
+        s = self.plane[0] + self.plane[1] * (b[:, 0] + b[:, 2] / 2) + self.plane[2] * (
+            b[:, 1] + b[:, 3])
+        return s > 0
 
     def expected(self, tlwh: ArrayLike) -> FloatArray:
         """(M, K, 2): the size of each kind standing where each box ``tlwh`` (M, 4) stands."""

@@ -40,7 +40,6 @@ from numpy.typing import NDArray
 from mvtrack.detection.adaptive import temporal_median
 from mvtrack.detection.background import box_cover
 from mvtrack.detection.colourbg import ColourBackground
-from mvtrack.detection.feedback import TrackFeedback
 from mvtrack.detection.kinds import KindModel
 from mvtrack.detection.splitmerge import (
     MERGED,
@@ -50,8 +49,10 @@ from mvtrack.detection.splitmerge import (
     split_by_tracks,
     usable_predictions,
 )
+from mvtrack.detection.travel import Travel
 from mvtrack.detection.waists import cut_at_waists, join_fragments
-from mvtrack.types import Detections, TrackFrame
+from mvtrack.detection.wings import cut_flat_wings
+from mvtrack.types import Detections, TrackFrame, TrackState, take_rows
 
 Image = NDArray[np.uint8]
 FloatArray = NDArray[np.float64]
@@ -132,10 +133,12 @@ class RoadUserDetector:
         over: float = 1.8,
         min_part: float = 0.5,
         valley: float = 0.5,
-        small: float = 0.2,
+        small: float = 0.5,
         max_z: float = 3.0,
         close_frac: float = 0.2,
         close_bands: int = 8,
+        wings: float = 0.3,
+        travel: float = 0.25,
         hold: bool = True,
         alpha: float = 0.02,
         alpha_slow: float = 0.0,
@@ -165,8 +168,13 @@ class RoadUserDetector:
             alpha=alpha, alpha_slow=alpha_slow, absorb_after=absorb_after, k_sigma=k_sigma,
             min_diff=min_diff, jitter=jitter, shadows=shadows, ghost_every=ghost_every)
         self.kinds = KindModel()
-        # the tracker's predicted boxes (for blobs that several tracks share, and held)
-        self.feedback = TrackFeedback(self, learn=False)  # type: ignore[arg-type]
+        # which of the tracker's tracks have travelled (by the tracker's IDs), and which of
+        # the tracks shown have (by the IDs shown)
+        self.travel = Travel(travel)
+        self._shown = Travel(travel)
+        #: the boxes the tracker predicts for the next frame of its confirmed tracks that
+        #: have travelled (for blobs that several tracks share, and held)
+        self.predicted: FloatArray | None = None
         self.learn_kinds = bool(learn)
         self.bootstrap = bootstrap
         self.bootstrap_frames = int(bootstrap_frames)
@@ -179,6 +187,7 @@ class RoadUserDetector:
         self.hold = bool(hold)
         self.close_frac = float(close_frac)
         self.close_bands = int(close_bands)
+        self.wings = float(wings)
         self._open = np.ones((3, 3), np.uint8)
         self._close = (None if close_size <= 1 else
                        cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_size, close_size)))
@@ -259,9 +268,32 @@ class RoadUserDetector:
                 close()
 
     def observe(self, dets: Detections, tracks: TrackFrame) -> None:
-        """After each tracker step: keep the confirmed tracks' boxes predicted for the next
-        frame."""
-        self.feedback.observe(dets, self.flags, tracks)
+        """After each tracker step: keep the boxes predicted for the next frame of the
+        confirmed tracks that have travelled, and learn the kinds from their detections
+        (blobs as found, isolated, off the border)."""
+        size = None if self._shape is None else (self._shape[1], self._shape[0])
+        moved = self.travel.update(tracks, size) & (tracks.state != int(TrackState.DELETED))
+        xy = tracks.filtered_xy[moved] + tracks.velocity[moved]
+        self.predicted = np.column_stack([xy - tracks.wh[moved] / 2, tracks.wh[moved]])
+        if not self.learn_kinds or not moved.any() or len(dets) == 0:
+            return
+        rows = tracks.det_index[moved & (tracks.det_index >= 0)]
+        if rows.size == 0 or len(self.flags) != len(dets):
+            return
+        boxes = dets.tlwh[rows]
+        good = (self.flags[rows] == PLAIN) & ~self._at_border(boxes)
+        if good.any():
+            self.kinds.update(boxes[good])
+
+    def shown(self, tracks: TrackFrame) -> TrackFrame:
+        """The rows of ``tracks`` (IDs as shown) whose tracks have travelled: a track is shown
+        from its first row ``travel`` box sizes from where it was born
+        (:class:`~mvtrack.detection.travel.Travel`)."""
+        size = None if self._shape is None else (self._shape[1], self._shape[0])
+        keep = self._shown.update(tracks, size)
+        if keep.all():
+            return tracks
+        return take_rows(tracks, keep)
 
     def reset(self) -> None:
         """Forget the background (the kinds are kept)."""
@@ -280,7 +312,7 @@ class RoadUserDetector:
         self._shape = frame.shape[:2]
         img = self.reduce(frame)
         held = None
-        pred = self.feedback.predicted
+        pred = self.predicted
         if self.hold and pred is not None and len(pred):
             held = box_cover(self.to_work(pred), img.shape[:2])
         raw = self.background.apply(img, held)
@@ -332,17 +364,14 @@ class RoadUserDetector:
         labels, stats = _label(mask)
         ids = np.flatnonzero(stats[:, cv2.CC_STAT_AREA] >= self.min_area)
         ids = ids[ids > 0]
-        st = stats[ids].astype(np.float64)
-        boxes = np.column_stack([st[:, 0] - 0.5, st[:, 1] - 0.5, st[:, 2], st[:, 3]])
-        area = st[:, 4]
+        boxes, src, area = cut_flat_wings(labels, ids, stats, self.wings)
+        big = area >= self.min_area
+        boxes, ids, area = boxes[big], ids[src[big]], area[big]
         flags = np.full(len(boxes), PLAIN, np.int8)
         if len(boxes) == 0:
             return boxes, flags, area
         kinds = self.kinds
-        if self.learn_kinds:  # the blobs as found (not the boxes made of them), off the border
-            inp = self.to_input(boxes)
-            kinds.update(inp[~self._at_border(inp)])
-        pred = self.feedback.predicted
+        pred = self.predicted
         pred = usable_predictions(None if pred is None else self.to_work(pred))
         # 3. blobs that two or more tracks predict into divided among them
         k_of = np.zeros(len(boxes), np.int64)
@@ -427,8 +456,9 @@ class RoadUserDetector:
                 area = np.concatenate([jarea, area[keep]])
                 inp = self.to_input(boxes)
                 share = (inp[:, None, 2] * inp[:, None, 3]) / kinds.expected(inp).prod(axis=2)
-        # 5. clutter: smaller than `small` of every kind where it stands (not at the border)
-        ok = (share.max(axis=1) >= self.small) | self._at_border(inp)
+        # 5. clutter: smaller than `small` of every kind where it stands (not at the border),
+        # or standing above the horizon
+        ok = ((share.max(axis=1) >= self.small) | self._at_border(inp)) & kinds.standing(inp)
         return boxes[ok], flags[ok], area[ok]
 
 

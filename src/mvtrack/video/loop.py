@@ -279,6 +279,7 @@ def run_frames(
     prepare = getattr(detector, "prepare", None)
     iterator: Iterator[Image] = iter(prepare(frames) if prepare is not None else frames)
     observe = getattr(detector, "observe", None)
+    shown = getattr(detector, "shown", None)
     k = 0
     try:
         with frame_boundary_signals() as check_signals:
@@ -305,6 +306,8 @@ def run_frames(
                 if relink is not None:
                     live = getattr(getattr(tracker, "tracks", None), "track_id", None)
                     tracks = relink(image, tracks, live)
+                if shown is not None:
+                    tracks = shown(tracks)
                 if keep:
                     result.tracks.append(tracks)
                     result.scores.append(shown_scores(rescuer, relink))
