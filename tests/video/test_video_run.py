@@ -545,3 +545,141 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
     assert guard.held_scores.track_id.size == 0
     with pytest.raises(ValueError, match="max_shift"):
         StoppedVehicleRescuer(inner, tracker, max_shift=0.0)
+
+
+class _Bank:
+    """A stand-in template bank: each track's template box (centre x, y, w, h)."""
+
+    def __init__(self, boxes: np.ndarray) -> None:
+        self._boxes = boxes
+
+    def __len__(self) -> int:
+        return len(self._boxes)
+
+    def boxes(self, uids):
+        return self._boxes[np.asarray(uids)]
+
+
+class _Search:
+    """A stand-in NCC search that finds every track ``offset`` px from where it is asked."""
+
+    def __init__(self, bank: _Bank, n: int) -> None:
+        self.bank = bank
+        self.offset = np.zeros((n, 2))
+        self.asked: list[np.ndarray] = []
+
+    def search(self, image):
+        def search(uids, xy, wh):
+            self.asked.append(np.array(uids))
+            return np.ones(len(uids), bool), xy + self.offset[uids], np.full(len(uids), 0.9)
+
+        return search
+
+    def observe(self, image, dets, tracks):
+        pass
+
+
+def _guard(state, last, boxes, velocity, offset=None):
+    from types import SimpleNamespace
+
+    from mvtrack.video import StoppedVehicleRescuer
+
+    n = len(boxes)
+    inner = _Search(_Bank(np.array(boxes, float)), n)
+    if offset is not None:
+        inner.offset[:] = offset
+    tracker = SimpleNamespace(
+        tracks=SimpleNamespace(uid=np.arange(n), track_id=np.arange(n) + 10,
+                               last_xy=np.array(last, float), state=np.array(state)),
+        row_uids=np.arange(n), config=SimpleNamespace(fps=10.0))
+    guard = StoppedVehicleRescuer(inner, tracker, max_shift=4.0)
+    # the last frame's rows: their velocities (px/frame) and boxes tell which tracks stand
+    rows = TrackFrame(0, np.arange(n) + 10, np.array(state), np.full(n, -1),
+                      *(np.zeros((n, 2)) for _ in range(3)), np.array(boxes, float)[:, 2:],
+                      np.array(velocity, float))
+    guard.observe(np.zeros((10, 10, 3), np.uint8), Detections.empty(0), rows)
+    return guard, inner
+
+
+def test_pieces_of_a_vehicle_that_stands_are_left_to_its_template() -> None:
+    """A detection inside the template's box (widened by ``max_shift``) of a track that
+    stands, was last measured there and whose template still matches there, belongs to
+    that vehicle (a piece of it): left out of the tracker's step. Not when the track moves
+    (a speed of a box side per second or more), was last measured elsewhere, or its match
+    lies more than ``max_shift`` px away; nor a detection that reaches out of the box."""
+    from mvtrack.types import TrackState
+
+    ok = int(TrackState.CONFIRMED)
+    boxes = [[50, 50, 20, 30], [150, 50, 20, 30], [250, 50, 20, 30], [350, 50, 20, 30],
+             [450, 50, 20, 30]]
+    last = [[50, 55], [150, 50], [250, 50], [350, 120], [450, 50]]
+    # track 1 moves 2 px a frame (20 px/s at 10 fps, a side of 20 px per second): not still
+    velocity = [[0.5, 0], [2.0, 0], [0, 0.3], [0, 0], [0, 0]]
+    offset = np.zeros((5, 2))
+    offset[2] = (0, 5.0)  # track 2's template matches 5 px from its place: it has moved on
+    guard, inner = _guard([ok] * 5, last, boxes, velocity, offset)
+    image = np.zeros((200, 500, 3), np.uint8)
+    tlwh = np.array([
+        [42, 45, 20, 16],   # 0: the rear half of vehicle 0, 2 px out of its box: a piece
+        [52, 38, 10, 10],   # 1: inside vehicle 0's box
+        [35, 40, 20, 20],   # 2: reaches 5 px out of it (a car passing by): kept
+        [142, 50, 16, 14],  # 3: inside the box of track 1, which moves: kept
+        [242, 50, 16, 14],  # 4: inside the box of track 2, matched too far: kept
+        [342, 50, 16, 14],  # 5: inside the box of track 3, last measured far off: kept
+        [441, 36, 18, 28],  # 6: track 4, whole (the vehicle itself): left to its template
+    ], float)
+    drop = guard.fragments(image, Detections.from_tlwh(0, tlwh))
+    assert drop.tolist() == [True, True, False, False, False, False, True]
+    # the search ran for the tracks that stand with a detection inside their box, at the
+    # box's centre
+    assert sorted(np.concatenate(inner.asked).tolist()) == [0, 2, 4]
+    # nothing to search: no detection, or no track stands
+    assert not guard.fragments(image, Detections.empty(0)).size
+    still, _ = _guard([ok] * 5, last, boxes, [[3.0, 0]] * 5)
+    assert not still.fragments(image, Detections.from_tlwh(0, tlwh)).any()
+
+
+def test_a_vehicle_held_by_its_template_stays_held_under_a_blob_reaching_beyond_it() -> None:
+    """A blob covering a vehicle's match refuses the match (a detected object has not
+    faded), unless it is several times the vehicle's size, or the vehicle was held by its
+    template in the last frame and the blob reaches out of its template's box (a car
+    passing close by merged with its pieces). A blob inside the box still refuses it."""
+    from mvtrack.types import TrackState
+
+    held, ok = int(TrackState.STOPPED), int(TrackState.CONFIRMED)
+    boxes = [[50, 50, 20, 30], [150, 50, 20, 30], [250, 50, 20, 30]]
+    guard, _ = _guard([held, ok, held], [[50, 50], [150, 50], [250, 50]], boxes,
+                      [[0, 0]] * 3)
+    image = np.zeros((100, 300, 3), np.uint8)
+    passing = np.array([[30, 40, 34, 24], [130, 40, 34, 24], [242, 40, 16, 24]], float)
+    rescue = guard.callback(image, Detections.from_tlwh(0, passing))
+    found, xy = rescue(np.arange(3), np.array(boxes, float)[:, :2], np.full((3, 2), 20.0))
+    assert found.tolist() == [True, False, False]
+    np.testing.assert_allclose(xy[0], [50, 50])
+    assert np.isnan(xy[1:]).all()
+
+
+def test_the_tracker_never_sees_the_dropped_detections_the_rest_does() -> None:
+    """``step_without``: the rescuer's callback and the tracker get the detections not
+    dropped; the rows' ``det_index`` point into the frame's detections as the front end
+    gave them."""
+    from mvtrack.video.loop import step_without
+
+    seen = {}
+
+    class Tracker:
+        def step(self, dets, rescue=None):
+            seen["step"] = dets.xy[:, 0].tolist()
+            return TrackFrame(0, np.array([1, 2, 3]), np.ones(3, np.int64),
+                              np.array([1, -1, 0]), *(np.zeros((3, 2)) for _ in range(5)))
+
+    class Rescuer:
+        def callback(self, image, dets):
+            seen["callback"] = dets.xy[:, 0].tolist()
+
+    dets = Detections(0, [[10.0, 0], [20.0, 0], [30.0, 0], [40.0, 0]], np.ones((4, 2)))
+    out = step_without(Tracker(), Rescuer(), None, dets, np.array([True, False, True, False]))
+    assert seen == {"step": [20.0, 40.0], "callback": [20.0, 40.0]}
+    assert out.det_index.tolist() == [3, -1, 1]
+    out = step_without(Tracker(), Rescuer(), None, dets, np.zeros(4, bool))
+    assert seen["step"] == [10.0, 20.0, 30.0, 40.0] and out.det_index.tolist() == [1, -1, 0]

@@ -16,7 +16,10 @@ loop reads the video through it (a background bootstrap from the first frames); 
 the next frame, the size prior taught by the tracks); its ``flags`` after each call (plain /
 merged / split of each box) are kept in :attr:`PipelineResult.flags`. A rescuer's
 ``held_scores`` after each frame (the NCC score of each row held by template matching) are
-kept in :attr:`PipelineResult.scores`.
+kept in :attr:`PipelineResult.scores`. A rescuer with ``fragments(image, dets) -> (M,) bool``
+names the detections that belong to vehicles it holds (the pieces of a vehicle that stands):
+the tracker's step and the rescuer's callback do without them (:func:`step_without`), and
+everything else sees the frame's detections as the front end gave them.
 It shows a tqdm progress bar on stderr when stderr is a terminal, stops cleanly on Ctrl-C
 (``KeyboardInterrupt`` inside the loop ends it with ``interrupted=True``; what was tracked so
 far is returned) and treats a source that fails mid-way the same (``error`` holds the message).
@@ -166,6 +169,23 @@ def shown_scores(rescuer: Any, relink: Any = None) -> HeldScores:
     return held
 
 
+def step_without(tracker: StepTracker, rescuer: Rescuer, image: Image, dets: Detections,
+                 drop: NDArray[np.bool_]) -> TrackFrame:
+    """The rescuer's callback and ``tracker.step`` on the detections not in ``drop``; the
+    rows' ``det_index`` point into ``dets`` (all of them) again, so that the detector, the
+    rescuer and the writers see the frame's detections as the front end gave them, and no
+    track uses a dropped one."""
+    if not drop.any():
+        return tracker.step(dets, rescue=rescuer.callback(image, dets))
+    keep = np.flatnonzero(~drop)
+    kept = dets.take(keep)
+    tracks = tracker.step(kept, rescue=rescuer.callback(image, kept))
+    det = tracks.det_index.copy()
+    used = det >= 0
+    det[used] = keep[det[used]]
+    return dataclasses.replace(tracks, det_index=det)
+
+
 def progress_bar(total: int | None, desc: str, enabled: bool | None = None) -> Any:
     """A tqdm bar on stderr, shown only when stderr is a terminal (or ``enabled``)."""
     from tqdm import tqdm
@@ -280,6 +300,7 @@ def run_frames(
     iterator: Iterator[Image] = iter(prepare(frames) if prepare is not None else frames)
     observe = getattr(detector, "observe", None)
     shown = getattr(detector, "shown", None)
+    fragments = getattr(rescuer, "fragments", None)
     k = 0
     try:
         with frame_boundary_signals() as check_signals:
@@ -295,8 +316,12 @@ def run_frames(
                     result.error = str(exc)
                     break
                 dets = _with_frame(detector(image), k)
-                rescue = rescuer.callback(image, dets) if rescuer is not None else None
-                tracks = tracker.step(dets, rescue=rescue)
+                if fragments is None:
+                    rescue = rescuer.callback(image, dets) if rescuer is not None else None
+                    tracks = tracker.step(dets, rescue=rescue)
+                else:  # pieces of stopped vehicles left out: their templates hold them
+                    tracks = step_without(tracker, rescuer, image, dets,
+                                          fragments(image, dets))
                 if observe is not None:
                     observe(dets, tracks)
                 if keep:

@@ -2,7 +2,10 @@
 
 A vehicle that stops fades into the disturbance-map background and its blob vanishes; the
 tracker offers its confirmed tracks that got no detection to a ``rescue`` callback, and the
-ones found by template matching are held in state ``STOPPED``.
+ones found by template matching are held in state ``STOPPED``. A vehicle that stands but
+stays foreground in pieces (its body of the road's colour) is held the same way: the frame
+loop leaves the detections inside its template's box out of the tracker's step
+(:meth:`StoppedVehicleRescuer.fragments`).
 :class:`~mvtrack.detection.template.TemplateBank` (arrays in, no tracker) keeps the
 appearances and does the NCC search; here :class:`TemplateRescuer` maps the tracker's output
 rows to its uids and feeds the bank, and :class:`StoppedVehicleRescuer` accepts only what a
@@ -72,6 +75,30 @@ def held_scores(
     return HeldScores(ids[ok], np.minimum(scores[order][pos][ok], 1.0))
 
 
+def standing_uids(tracker: Any, tracks: TrackFrame) -> IntArray:
+    """The internal uids (sorted) of the rows of ``tracks`` whose track stands: the filter's
+    speed is below the box's shorter side per second (``speed · fps < min(w, h)``, the
+    ``motion`` of ``states.csv``, :data:`~mvtrack.analytics.outputs.STOPPED_SIDES_PER_S`).
+    None (empty) for a tracker without ``row_uids`` or a frame rate."""
+    from mvtrack.analytics.outputs import STOPPED_SIDES_PER_S
+
+    fps = getattr(getattr(tracker, "config", None), "fps", None)
+    row_uids = getattr(tracker, "row_uids", None)
+    if not fps or row_uids is None or len(row_uids) != len(tracks) or len(tracks) == 0:
+        return _NO_UIDS
+    speed = np.hypot(tracks.velocity[:, 0], tracks.velocity[:, 1]) * float(fps)
+    still = speed < STOPPED_SIDES_PER_S * tracks.wh.min(axis=1)
+    return np.sort(np.asarray(row_uids, np.int64)[still])
+
+
+def _member(a: IntArray, sorted_b: IntArray) -> NDArray[np.bool_]:
+    """``np.isin(a, b)`` for a sorted ``b``."""
+    if a.size == 0 or sorted_b.size == 0:
+        return np.zeros(a.size, bool)
+    pos = np.minimum(np.searchsorted(sorted_b, a), sorted_b.size - 1)
+    return sorted_b[pos] == a
+
+
 def _uids_of_ids(table: Any, ids: IntArray) -> IntArray:
     """Internal uid of each public ID in ``ids`` through a track table (−1: unknown)."""
     t_uid = np.asarray(table.uid, np.int64)
@@ -131,6 +158,7 @@ class StoppedVehicleRescuer:
         self.max_shift = float(max_shift)
         self.held_scores: HeldScores = NO_SCORES
         self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
+        self._standing: IntArray = _NO_UIDS
 
     def callback(self, image: Image, dets: Detections) -> RescueFn:
         """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for this frame.
@@ -159,18 +187,89 @@ class StoppedVehicleRescuer:
                 return found, xy
             # and no detection of about its size may cover it (a detected object has not
             # faded); a blob several times its size is vehicles merged into one (a queue that
-            # starts again, its vehicles still close): the vehicle is found inside it
+            # starts again, its vehicles still close): the vehicle is found inside it. So is
+            # a vehicle that was held by its template in the last frame (it stands) under a
+            # blob that reaches beyond its template's box: a car passing close by has merged
+            # with the pieces of it that stay foreground
             if len(dets) and found.any():
                 lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
                 inside = ((xy[:, None, :] >= lo[None]) & (xy[:, None, :] <= hi[None])).all(2)
                 area = np.asarray(wh, np.float64).reshape(-1, 2).prod(axis=1)
                 merged = dets.wh.prod(axis=1)[None, :] > self.MERGED * area[:, None]
+                bank = getattr(self.inner, "bank", None)
+                stood = (tab.state[at] == int(TrackState.STOPPED) if hasattr(bank, "boxes")
+                         else np.zeros(uids.size, bool))
+                if stood.any():
+                    merged[stood] |= ~self._within(bank.boxes(uids[stood]), dets)
                 found &= ~(inside & ~merged).any(axis=1)
             xy[~found] = np.nan
             self._accepted = (uids[found], score[found])
             return found, xy
 
         return rescue
+
+    def fragments(self, image: Image, dets: Detections) -> NDArray[np.bool_]:
+        """The detections of this frame that belong to a vehicle that stands: to be left out
+        of the tracker's step, so that :meth:`callback` holds the vehicle whole by its
+        template.
+
+        A vehicle that stands does not always stay one blob: where its body has the road's
+        colour (a grey car on grey asphalt) only its edges, windows and shadow differ from
+        the background, and its blob is a piece of it — its rear half, one side. Given to the
+        tracker, such pieces shrink and shift the vehicle's box frame after frame (and the
+        template bank, refreshed with them, forgets the whole vehicle). A detection belongs
+        to a vehicle that stands when, for a confirmed track,
+
+        - the track stands: the filter's speed was below its box's shorter side per second
+          in the last frame (:func:`standing_uids`, the ``motion`` of ``states.csv``),
+        - the track was last measured within reach of its template's box (its last
+          full-size detection; as :meth:`_centres`),
+        - the detection lies inside that box widened by ``max_shift`` px on every side,
+        - and the template matches (NCC ≥ the bank's ``min_score``, over the template's own
+          object pixels) within ``max_shift`` px of that box's centre: the vehicle still
+          stands, whole, where it was last seen whole.
+
+        The vehicle is then held by its template as one that faded completely (paper 1's
+        stopped vehicle, SPEC §1.1 step 3): its rows are ``stopped``, with the NCC score,
+        whether its blob was a piece of it or the whole of it. A vehicle that drives on
+        leaves its template's place (no match within ``max_shift``), and its detections are
+        kept. The search runs only for the tracks that stand with a detection inside their
+        template's box, a few per frame.
+
+        Returns
+        -------
+        (M,) bool
+            True for the detections to leave out.
+        """
+        out = np.zeros(len(dets), bool)
+        bank = getattr(self.inner, "bank", None)
+        if len(dets) == 0 or bank is None or len(bank) == 0 or not hasattr(bank, "boxes"):
+            return out
+        tab = self.tracker.tracks
+        live = np.flatnonzero((tab.track_id > 0) & _member(tab.uid, self._standing))
+        if live.size == 0:
+            return out
+        uids = tab.uid[live]
+        box = bank.boxes(uids)  # centre x, y, w, h; NaN for tracks without a template
+        half = box[:, 2:] / 2
+        # the vehicle was last measured at its template's place (a fragment of it)
+        reach = half + box[:, 2:].max(axis=1, keepdims=True)
+        here = (np.abs(tab.last_xy[live] - box[:, :2]) <= reach).all(axis=1)  # NaN: False
+        inside = self._within(box, dets) & here[:, None]  # (tracks, detections)
+        cand = np.flatnonzero(inside.any(axis=1))
+        if cand.size == 0:
+            return out
+        found, _, _ = self._search(self.inner.search(image), uids[cand], box[cand, :2],
+                                   box[cand, 2:])
+        return inside[cand[found]].any(axis=0)
+
+    def _within(self, box: FloatArray, dets: Detections) -> NDArray[np.bool_]:
+        """(K, M): detection ``m`` lies inside box ``k`` (centre x, y, w, h) widened by
+        ``max_shift`` px on every side (False for a NaN box)."""
+        half = box[:, None, 2:] / 2 + self.max_shift
+        d_half = dets.wh / 2
+        return ((dets.xy - d_half)[None] >= box[:, None, :2] - half).all(axis=2) & (
+            (dets.xy + d_half)[None] <= box[:, None, :2] + half).all(axis=2)
 
     def _search(
         self, search: RescueFn, uids: IntArray, centre: NDArray[np.float64], wh: Any
@@ -208,9 +307,11 @@ class StoppedVehicleRescuer:
         return np.where(inside[:, None], box[:, :2], last)
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
-        """Feed the template bank; set :attr:`held_scores` for this frame's rows."""
+        """Feed the template bank; set :attr:`held_scores` for this frame's rows; keep the
+        tracks that stand (:meth:`fragments`)."""
         self.inner.observe(image, dets, tracks)
         self.held_scores = held_scores(self.tracker, tracks, *self._accepted)
+        self._standing = standing_uids(self.tracker, tracks)
 
 
 def search_radii(tracker: Any, uids: Any, default: float, gates: Any = None) -> FloatArray:
