@@ -633,6 +633,13 @@ def test_pieces_of_a_vehicle_that_stands_are_left_to_its_template() -> None:
     # the search ran for the tracks that stand with a detection inside their box, at the
     # box's centre
     assert sorted(np.concatenate(inner.asked).tolist()) == [0, 2, 4]
+    # the callback of the same frame takes the matches found, and searches only the others
+    asked = len(inner.asked)
+    found, xy = guard.callback(image, Detections.empty(0))(
+        np.array([0, 3, 4]), np.zeros((3, 2)), np.full((3, 2), 20.0))
+    assert found.tolist() == [True, True, True]
+    np.testing.assert_allclose(xy, [[50, 50], [350, 120], [450, 50]])
+    assert [a.tolist() for a in inner.asked[asked:]] == [[3]]
     # nothing to search: no detection, or no track stands
     assert not guard.fragments(image, Detections.empty(0)).size
     still, _ = _guard([ok] * 5, last, boxes, [[3.0, 0]] * 5)

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack.analytics.outputs import STOPPED_SIDES_PER_S
 from mvtrack.errors import InputError
 from mvtrack.types import Detections, TrackFrame, TrackState
 from mvtrack.video.loop import NO_SCORES, HeldScores, RescueFn
@@ -80,8 +81,6 @@ def standing_uids(tracker: Any, tracks: TrackFrame) -> IntArray:
     speed is below the box's shorter side per second (``speed · fps < min(w, h)``, the
     ``motion`` of ``states.csv``, :data:`~mvtrack.analytics.outputs.STOPPED_SIDES_PER_S`).
     None (empty) for a tracker without ``row_uids`` or a frame rate."""
-    from mvtrack.analytics.outputs import STOPPED_SIDES_PER_S
-
     fps = getattr(getattr(tracker, "config", None), "fps", None)
     row_uids = getattr(tracker, "row_uids", None)
     if not fps or row_uids is None or len(row_uids) != len(tracks) or len(tracks) == 0:
@@ -159,6 +158,9 @@ class StoppedVehicleRescuer:
         self.held_scores: HeldScores = NO_SCORES
         self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
         self._standing: IntArray = _NO_UIDS
+        # the matches :meth:`fragments` found in the frame it was given (the frame, uids,
+        # centres, scores): the callback of that frame takes them instead of searching again
+        self._found: tuple[Any, IntArray, FloatArray, FloatArray] | None = None
 
     def callback(self, image: Image, dets: Detections) -> RescueFn:
         """``rescue(uids, predicted_xy, wh) -> (found, xy)`` for this frame.
@@ -177,7 +179,7 @@ class StoppedVehicleRescuer:
             at = order[np.searchsorted(tab.uid[order], uids)]
             last = tab.last_xy[at]
             centre = self._centres(uids, last)
-            found, xy, score = self._search(search, uids, centre, wh)
+            found, xy, score = self._search(search, uids, centre, wh, image)
             # not at its template's place: where it was last measured
             again = ~found & (centre != last).any(axis=1)
             if again.any():
@@ -259,8 +261,9 @@ class StoppedVehicleRescuer:
         cand = np.flatnonzero(inside.any(axis=1))
         if cand.size == 0:
             return out
-        found, _, _ = self._search(self.inner.search(image), uids[cand], box[cand, :2],
-                                   box[cand, 2:])
+        found, xy, score = self._search(self.inner.search(image), uids[cand], box[cand, :2],
+                                        box[cand, 2:])
+        self._found = (image, uids[cand][found], xy[found], score[found])
         return inside[cand[found]].any(axis=0)
 
     def _within(self, box: FloatArray, dets: Detections) -> NDArray[np.bool_]:
@@ -272,17 +275,36 @@ class StoppedVehicleRescuer:
             (dets.xy + d_half)[None] <= box[:, None, :2] + half).all(axis=2)
 
     def _search(
-        self, search: RescueFn, uids: IntArray, centre: NDArray[np.float64], wh: Any
+        self, search: RescueFn, uids: IntArray, centre: NDArray[np.float64], wh: Any,
+        image: Image | None = None,
     ) -> tuple[NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]]:
         """NCC search around ``centre``; matches farther than ``max_shift`` from it refused.
-        Returns ``found``, ``xy`` and the NCC ``score`` of each track."""
-        f_sub, xy_sub, s_sub = search(uids, centre, wh)
-        found = np.array(f_sub, bool)
-        xy = np.array(xy_sub, np.float64)
-        score = np.array(s_sub, np.float64)
-        if found.any():  # the match must sit where the vehicle was last seen (it stands)
-            d = xy - centre
-            found &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
+        Returns ``found``, ``xy`` and the NCC ``score`` of each track. The tracks that
+        :meth:`fragments` found in ``image`` (searched around the same centre, the box of
+        their template) are not searched again."""
+        done = np.zeros(uids.size, bool)
+        cache = self._found
+        if image is not None and cache is not None and cache[0] is image and cache[1].size:
+            order = np.argsort(cache[1])
+            pos = np.minimum(np.searchsorted(cache[1][order], uids), cache[1].size - 1)
+            done = cache[1][order][pos] == uids
+            done &= (np.abs(cache[2][order][pos] - centre) <= self.max_shift).all(axis=1)
+        found = np.zeros(uids.size, bool)
+        xy = np.full((uids.size, 2), np.nan)
+        score = np.full(uids.size, np.nan)
+        if done.any():
+            hit = order[pos[done]]
+            found[done], xy[done], score[done] = True, cache[2][hit], cache[3][hit]
+        rest = ~done
+        if rest.any():
+            f_sub, xy_sub, s_sub = search(uids[rest], centre[rest],
+                                          np.asarray(wh, np.float64).reshape(-1, 2)[rest])
+            found[rest] = np.array(f_sub, bool)
+            xy[rest] = np.array(xy_sub, np.float64)
+            score[rest] = np.array(s_sub, np.float64)
+            if found[rest].any():  # the match must sit where the vehicle was last seen
+                d = xy[rest] - centre[rest]
+                found[rest] &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
         return found, xy, score
 
     def _centres(self, uids: IntArray, last: NDArray[np.float64]) -> NDArray[np.float64]:
