@@ -34,7 +34,12 @@ def main() -> None:
         movement_counts,
         truth_movement_counts,
     )
-    from mvtrack.experiments._video import default_config, pipeline_blob_params, track_scene
+    from mvtrack.experiments._video import (
+        PAPER_TEMPLATES,
+        default_config,
+        pipeline_blob_params,
+        track_scene,
+    )
     from mvtrack.sim.queue import queue_scene, queue_settings
     from mvtrack.sim.render import render_frames
     from mvtrack.tracking import paper1
@@ -60,7 +65,9 @@ def main() -> None:
                 blobs = {**blobs, "ghost_every": 5}
             if "hold" in extras:  # tracked pixels kept out of the background for 60 s
                 blobs = {**blobs, "hold": round(60 * sc.fps)}
-            run = track_scene(sc, cfg, seed=seed, frames=frames, detector_params=blobs)
+            # paper 1's trackers with paper 1's template matching (SPEC §1.1 step 3)
+            run = track_scene(sc, cfg, seed=seed, frames=frames, detector_params=blobs,
+                              template_params=None if base == "default" else PAPER_TEMPLATES)
             share = {}
             for v in range(1, sc.n_objects + 1):  # a dozen vehicles
                 fr = sc.frame[sc.visible & (sc.id == v)]

@@ -579,7 +579,7 @@ class _Search:
         pass
 
 
-def _guard(state, last, boxes, velocity, offset=None):
+def _guard(state, last, boxes, velocity, offset=None, pieces=True):
     from types import SimpleNamespace
 
     from mvtrack.video import StoppedVehicleRescuer
@@ -592,7 +592,7 @@ def _guard(state, last, boxes, velocity, offset=None):
         tracks=SimpleNamespace(uid=np.arange(n), track_id=np.arange(n) + 10,
                                last_xy=np.array(last, float), state=np.array(state)),
         row_uids=np.arange(n), config=SimpleNamespace(fps=10.0))
-    guard = StoppedVehicleRescuer(inner, tracker, max_shift=4.0)
+    guard = StoppedVehicleRescuer(inner, tracker, max_shift=4.0, pieces=pieces)
     # the last frame's rows: their velocities (px/frame) and boxes tell which tracks stand
     rows = TrackFrame(0, np.arange(n) + 10, np.array(state), np.full(n, -1),
                       *(np.zeros((n, 2)) for _ in range(3)), np.array(boxes, float)[:, 2:],
@@ -644,6 +644,19 @@ def test_pieces_of_a_vehicle_that_stands_are_left_to_its_template() -> None:
     assert not guard.fragments(image, Detections.empty(0)).size
     still, _ = _guard([ok] * 5, last, boxes, [[3.0, 0]] * 5)
     assert not still.fragments(image, Detections.from_tlwh(0, tlwh)).any()
+    # paper 1's rule (the paper experiments): only tracks without a detection are searched
+    paper, inner = _guard([ok] * 5, last, boxes, velocity, offset, pieces=False)
+    assert not paper.fragments(image, Detections.from_tlwh(0, tlwh)).any() and not inner.asked
+
+
+def test_template_settings_choose_paper_1s_rule() -> None:
+    """``[templates] pieces = false`` (the paper experiments' setting) reaches the guard;
+    the pipeline's default holds vehicles that stand in pieces."""
+    from mvtrack.tracking import Tracker
+    from mvtrack.video.build import build_rescuer
+
+    assert build_rescuer(RunSettings(), Tracker()).pieces
+    assert not build_rescuer(RunSettings(template_params={"pieces": False}), Tracker()).pieces
 
 
 def test_a_vehicle_held_by_its_template_stays_held_under_a_blob_reaching_beyond_it() -> None:
@@ -664,6 +677,11 @@ def test_a_vehicle_held_by_its_template_stays_held_under_a_blob_reaching_beyond_
     assert found.tolist() == [True, False, False]
     np.testing.assert_allclose(xy[0], [50, 50])
     assert np.isnan(xy[1:]).all()
+    paper, _ = _guard([held, ok, held], [[50, 50], [150, 50], [250, 50]], boxes, [[0, 0]] * 3,
+                      pieces=False)
+    found, _ = paper.callback(image, Detections.from_tlwh(0, passing))(
+        np.arange(3), np.array(boxes, float)[:, :2], np.full((3, 2), 20.0))
+    assert not found.any()
 
 
 def test_the_tracker_never_sees_the_dropped_detections_the_rest_does() -> None:

@@ -90,9 +90,9 @@ def states_table(
     - ``motion``: ``stopped`` when the filter's speed is below the box's shorter side
       per second (``speed · fps < min(w, h)``, :data:`STOPPED_SIDES_PER_S`), else
       ``moving`` — the moving → stopped → moving of a vehicle in a queue, whichever evidence
-      held the row (a waiting vehicle whose pixels the disturbance map holds stays a blob,
-      ``confirmed`` and ``stopped``; one that faded is held by its template, ``stopped`` in
-      both);
+      held the row (a waiting vehicle is held by its template once it stands, whether its
+      blob faded, stays whole or broke into pieces, ``stopped`` in both; while it brakes it
+      is a ``confirmed`` blob, ``stopped`` as soon as its speed is below a side a second);
     - ``blob``: for a row updated by a detection, whether its box came from a ``plain`` blob,
       from fragments ``merged`` into one predicted box or from a blob ``split`` among several
       tracks (``flags[k][j]`` of detection ``j`` of frame ``k``, as

@@ -28,6 +28,11 @@ from mvtrack.video import PipelineResult, build_rescuer, resolve_settings, run_f
 #: they keep it whatever the default of ``mvtrack track`` is
 PAPER_DETECTOR = "disturbance-map"
 
+#: paper 1's template matching (SPEC §1.1 step 3): only the tracks without a detection in
+#: their gate are searched, not also the pipeline's vehicles that stand and stay foreground
+#: (:meth:`mvtrack.video.rescue.StoppedVehicleRescuer.fragments`)
+PAPER_TEMPLATES: dict[str, Any] = {"pieces": False}
+
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
 

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from mvtrack.experiments._video import (
+    PAPER_TEMPLATES,
     SceneRun,
     default_config,
     default_frame_size,
@@ -76,10 +77,13 @@ def _settings(scene: Any) -> dict[str, dict[str, Any]]:
     out: dict[str, dict[str, Any]] = {}
     for p in PREDICTORS:
         cfg = paper1(p, fps=fps, gate_px=20.0)
-        out[p] = {"config": cfg, "detector_params": SPEC_BLOBS}
-        out[f"{p}, pipeline blobs"] = {"config": cfg, "detector_params": pipe}
+        out[p] = {"config": cfg, "detector_params": SPEC_BLOBS,
+                  "template_params": PAPER_TEMPLATES}
+        out[f"{p}, pipeline blobs"] = {"config": cfg, "detector_params": pipe,
+                                       "template_params": PAPER_TEMPLATES}
         out[f"{p}, NCC ≥ {LOOSE_NCC:g}"] = {"config": cfg, "detector_params": SPEC_BLOBS,
-                                           "template_params": {"min_score": LOOSE_NCC}}
+                                           "template_params": {**PAPER_TEMPLATES,
+                                                               "min_score": LOOSE_NCC}}
         out[f"{p}, no templates"] = {"config": cfg, "detector_params": SPEC_BLOBS,
                                      "templates": False}
     out["default"] = {"config": default_config(scene), "detector_params": pipe,

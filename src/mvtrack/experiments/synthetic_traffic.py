@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from mvtrack.experiments._video import (
+    PAPER_TEMPLATES,
     SceneRun,
     breaks,
     default_config,
@@ -157,7 +158,8 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
         for name, (cfg, prime) in settings.items():
             size = default_frame_size(scene) if name == "default" else None  # as mvtrack track
             tr = track_scene(scene, cfg, seed=s, prime=prime, detector_params=SPEC_BLOBS,
-                             frame_size=size)
+                             frame_size=size,
+                             template_params=None if name == "default" else PAPER_TEMPLATES)
             entry[name] = _measure(tr, v9)
             if r == 0:
                 first[name] = tr

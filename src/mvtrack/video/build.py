@@ -96,7 +96,8 @@ def build_rescuer(settings: RunSettings, tracker: Any, detector: Any = None) -> 
     has driven somewhere before it is searched: ``min_travel`` box lengths, ``min_travel_px``,
     ``min_hits``) in its :class:`~mvtrack.video.rescue.TemplateRescuer`, given the
     ``detector`` (its foreground mask restricts the templates to the objects' own pixels),
-    guarded by :class:`StoppedVehicleRescuer` (``max_shift``).
+    guarded by :class:`StoppedVehicleRescuer` (``max_shift``; ``pieces``: a vehicle that
+    stands held by its template also while it stays foreground, the default).
 
     With a detector and no ``min_pixels`` in the settings, a template needs half the
     detector's ``min_area`` in object pixels (20 px at 320×240, 115 px at 768×576 with the
@@ -111,9 +112,10 @@ def build_rescuer(settings: RunSettings, tracker: Any, detector: Any = None) -> 
     if min_area and "min_pixels" not in params:
         params["min_pixels"] = max(round(0.5 * min_area), 1)
     max_shift = params.pop("max_shift", StoppedVehicleRescuer.MAX_SHIFT)
+    pieces = params.pop("pieces", True)
     try:
         bank = TemplateBank(**params)
-        guard = StoppedVehicleRescuer(None, tracker, max_shift)
+        guard = StoppedVehicleRescuer(None, tracker, max_shift, pieces)
     except TypeError as exc:
         raise InputError(f"template settings: {exc}") from None
     # matches farther than max_shift are refused: the NCC need not look beyond it

@@ -136,6 +136,11 @@ class StoppedVehicleRescuer:
         Its ``tracks`` table gives each uid's last measurement.
     max_shift : float
         Largest distance (px) between the match and the last measured position.
+    pieces : bool, default True
+        Hold a vehicle that stands by its template also when it stays foreground, whole or
+        in pieces (:meth:`fragments`), and keep holding it under a blob that reaches out of
+        its template's box; False: paper 1's rule, only tracks without a detection in their
+        gate are searched (SPEC §1.1 step 3; the paper experiments).
 
     Attributes
     ----------
@@ -149,12 +154,14 @@ class StoppedVehicleRescuer:
     #: a covering detection larger than this many times the track's box is a merged blob
     MERGED = 2.5
 
-    def __init__(self, inner: Any, tracker: Any, max_shift: float = MAX_SHIFT) -> None:
+    def __init__(self, inner: Any, tracker: Any, max_shift: float = MAX_SHIFT,
+                 pieces: bool = True) -> None:
         if not max_shift > 0:
             raise InputError(f"template settings: max_shift must be > 0, got {max_shift}")
         self.inner = inner
         self.tracker = tracker
         self.max_shift = float(max_shift)
+        self.pieces = bool(pieces)
         self.held_scores: HeldScores = NO_SCORES
         self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
         self._standing: IntArray = _NO_UIDS
@@ -199,8 +206,8 @@ class StoppedVehicleRescuer:
                 area = np.asarray(wh, np.float64).reshape(-1, 2).prod(axis=1)
                 merged = dets.wh.prod(axis=1)[None, :] > self.MERGED * area[:, None]
                 bank = getattr(self.inner, "bank", None)
-                stood = (tab.state[at] == int(TrackState.STOPPED) if hasattr(bank, "boxes")
-                         else np.zeros(uids.size, bool))
+                stood = (tab.state[at] == int(TrackState.STOPPED)
+                         if self.pieces and hasattr(bank, "boxes") else np.zeros(uids.size, bool))
                 if stood.any():
                     merged[stood] |= ~self._within(bank.boxes(uids[stood]), dets)
                 found &= ~(inside & ~merged).any(axis=1)
@@ -245,7 +252,7 @@ class StoppedVehicleRescuer:
         """
         out = np.zeros(len(dets), bool)
         bank = getattr(self.inner, "bank", None)
-        if len(dets) == 0 or bank is None or len(bank) == 0 or not hasattr(bank, "boxes"):
+        if not (self.pieces and len(dets) and hasattr(bank, "boxes") and len(bank)):
             return out
         tab = self.tracker.tracks
         live = np.flatnonzero((tab.track_id > 0) & _member(tab.uid, self._standing))
