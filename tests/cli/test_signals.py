@@ -7,7 +7,6 @@ die at once (no results file, no summary, a hidden temporary MP4 left behind).
 from __future__ import annotations
 
 import json
-import os
 import signal
 import time
 from pathlib import Path
@@ -38,7 +37,7 @@ def test_sigterm_in_track_writes_what_was_tracked_and_exits_143(tmp_path, capsys
                                                                 monkeypatch) -> None:
     """The signal arrives in the frame loop (sent by the process to itself while frame 26 is
     detected): that frame is finished and kept, and the run ends after it."""
-    stop_at_frame(monkeypatch, 26, lambda: os.kill(os.getpid(), signal.SIGTERM))
+    stop_at_frame(monkeypatch, 26, lambda: signal.raise_signal(signal.SIGTERM))
     before = signal.getsignal(signal.SIGTERM)
     video = _write_avi(tmp_path / "v.avi")
     out = tmp_path / "out"
@@ -62,7 +61,7 @@ def test_ctrl_c_still_exits_130_after_a_sigterm_in_an_earlier_command(tmp_path, 
 
     def stop() -> None:
         if send["sig"] == signal.SIGTERM:
-            os.kill(os.getpid(), signal.SIGTERM)
+            signal.raise_signal(signal.SIGTERM)
         else:
             raise KeyboardInterrupt
 
@@ -85,7 +84,7 @@ def test_sigterm_outside_the_frame_loop_is_one_line_and_143(tmp_path, capsys,
     import mvtrack.eval.metrics as metrics
 
     def scoring(*args, **kwargs):
-        os.kill(os.getpid(), signal.SIGTERM)
+        signal.raise_signal(signal.SIGTERM)
         time.sleep(5)  # the handler raises before this returns
         raise AssertionError("SIGTERM was not turned into an interrupt")
 
@@ -185,7 +184,7 @@ def test_a_signal_in_track_detections_writes_the_frames_tracked(tmp_path, capsys
         def frames_sending():
             for k, d in enumerate(frames):
                 if k == 10:
-                    os.kill(os.getpid(), sig)
+                    signal.raise_signal(sig)
                 yield d
 
         return real(frames_sending(), config, **options)

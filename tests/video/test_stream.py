@@ -182,7 +182,7 @@ def test_sigterm_with_flush_keeps_what_was_streamed_and_writes_the_rest(
     video = box_video(tmp_path / "v.avi", n=80)
     assert main(["track", str(video), "--out", str(tmp_path / "plain"), "--no-video",
                  "--max-frames", "40"]) == 0
-    stop_at_frame(monkeypatch, 40, lambda: os.kill(os.getpid(), signal.SIGTERM))
+    stop_at_frame(monkeypatch, 40, lambda: signal.raise_signal(signal.SIGTERM))
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out), "--no-video", "--flush", "1e-9"]) == 143
     err = capsys.readouterr().err.strip().splitlines()[-1]
@@ -228,7 +228,7 @@ def test_signals_held_delivers_the_signal_after_the_block() -> None:
     done = []
     with pytest.raises(KeyboardInterrupt):
         with signals_held():
-            os.kill(os.getpid(), signal.SIGINT)
+            signal.raise_signal(signal.SIGINT)
             done.append("the block ran to its end")
     assert done == ["the block ran to its end"]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

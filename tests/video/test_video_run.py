@@ -113,11 +113,10 @@ class SignallingTracker(CountingTracker):
         self.handlers: list[object] = []
 
     def step(self, dets: Detections, rescue=None) -> TrackFrame:
-        import os
         import signal
 
         if dets.frame == 3:
-            os.kill(os.getpid(), self.sig)
+            signal.raise_signal(self.sig)
             self.handlers.append(signal.getsignal(signal.SIGTERM))
         out = super().step(dets, rescue)
         self.finished.append(dets.frame)
