@@ -392,6 +392,9 @@ def test_the_video_sets_the_image_size_and_leaves_the_tracker_alone() -> None:
     for s, size in ((small, (320.0, 240.0)), (big, (640.0, 480.0))):
         assert build_tracker_config(s, 30.0) == TrackerConfig(fps=30.0)
         assert build_tracker(s, 30.0).frame_size == size
+        assert build_tracker(s, 30.0).fused  # mvtrack track runs the compiled step
+    default = resolve_settings(RunSettings(), (768, 576), fps=10.0)  # road-users, vtest.avi
+    assert build_tracker(default, 10.0).fused
     mine = resolve_settings(
         RunSettings(tracker={"gate": 50.0, "measurement_noise": 0.2}, detector=DM,
                     detector_params={"min_area": 5.0}), (640, 480))
