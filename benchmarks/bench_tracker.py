@@ -186,7 +186,7 @@ def variants() -> list[tuple[str, TrackerConfig]]:
         ("every coasting row output (coast_std = inf)", TrackerConfig(coast_std=math.inf)),
         ("no loss by uncertainty (lost_std = None)", TrackerConfig(lost_std=None)),
         ("no birth test (birth_iou = None)", TrackerConfig(birth_iou=None)),
-        ("Euclidean 10 px gate", TrackerConfig(distance="euclidean", gate=None)),
+        ("Euclidean gate in box sizes", TrackerConfig(distance="euclidean", gate=None)),
         ("IoU 0.7", TrackerConfig(distance="iou", gate=None)),
         ("confirm on 3 hits", TrackerConfig(confirm_hits=3)),
         ("greedy instead of optimal", TrackerConfig(assign="greedy")),

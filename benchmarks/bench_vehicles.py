@@ -48,7 +48,8 @@ by leave-one-out over the four clips and KITTI-17 (people, scored on its own fro
 IoU 0.5 against ``gt.txt`` with flag-0 rows dropped): for each held-out sequence, the value
 with the best mean front-end F1 on the others, and its F1 on the held-out one. ``--loo-e2e``
 does the same for the constants of :data:`LOO_E2E_GRID`, scored on the end-to-end rows
-(``results.txt``), since the travel a track needs before it is shown acts on them only.
+(``results.txt``), since the travel a track needs before it is shown acts on them only
+(``--grid NAME ...``: only those constants).
 ``--people``: KITTI-17 end to end with every default, as ``mvtrack track KITTI-17/img1 --fps
 10`` and ``mvtrack eval --ignore drop`` score it (MOTA, IDF1).
 """
@@ -96,12 +97,23 @@ LOO_GRID: dict[str, tuple[float, ...]] = {
 
 #: the constants chosen by leave-one-out on the end-to-end rows (``--loo-e2e``): the
 #: distance a track travels before it is shown, held and learnt from, the flat wings' height,
-#: the clutter's share of the smallest kind
+#: the clutter's share of the smallest kind, the smallest blob (``area``: pixels of the
+#: 320×240 image, ``min_area = area s²``, :data:`mvtrack.video.settings.ROAD_USERS_AREA`)
 LOO_E2E_GRID: dict[str, tuple[float, ...]] = {
     "travel": (0.25, 0.5, 1.0),
     "wings": (0.2, 0.3, 0.4),
     "small": (0.2, 0.35, 0.5),
+    "area": (10.0, 20.0, 40.0, 60.0),
 }
+
+
+def e2e_params(name: str, value: float, frames: list[np.ndarray]) -> dict[str, Any]:
+    """The road-user front end's parameters for ``name = value`` of :data:`LOO_E2E_GRID`
+    (``area`` in pixels of the 320×240 image, given as ``min_area`` for the frame's size)."""
+    if name != "area":
+        return {name: value}
+    h, w = frames[0].shape[:2]
+    return {"min_area": float(round(value * w * h / (320 * 240)))}
 
 
 # --------------------------------------------------------------------------- the peers' side
@@ -515,16 +527,18 @@ def leave_one_out_e2e(args: argparse.Namespace, work: Path) -> dict[str, Any]:
     if KITTI.exists():
         seqs["KITTI-17"] = (read_kitti(), None)
     out: dict[str, Any] = {}
-    for name, grid in LOO_E2E_GRID.items():
+    names = args.grid or list(LOO_E2E_GRID)
+    for name, grid in ((n, LOO_E2E_GRID[n]) for n in names):
         f1: dict[float, dict[str, float]] = {}
         for value in grid:
             f1[value] = {}
             for seq, (frames, truth) in seqs.items():
+                params = e2e_params(name, value, frames)
                 if truth is None:
-                    got = run_mvtrack(frames, "road-users", work / "k", {name: value}, fps=10.0)
+                    got = run_mvtrack(frames, "road-users", work / "k", params, fps=10.0)
                     f1[value][seq] = kitti_f1(got["results"])
                 else:
-                    got = run_mvtrack(frames, "road-users", work / "l", {name: value})
+                    got = run_mvtrack(frames, "road-users", work / "l", params)
                     f1[value][seq] = truth.score(got["results"], 0.5)["f1"]
             print(f"loo-e2e {name}={value}: " + " ".join(f"{s} {v:.3f}" for s, v in
                                                        f1[value].items()), flush=True)
@@ -617,6 +631,8 @@ def main() -> None:
     ap.add_argument("--pictures", type=Path, default=None)
     ap.add_argument("--loo", action="store_true")
     ap.add_argument("--loo-e2e", action="store_true")
+    ap.add_argument("--grid", nargs="+", choices=sorted(LOO_E2E_GRID), default=None,
+                    help="with --loo-e2e: only these constants")
     ap.add_argument("--people", action="store_true",
                     help="KITTI-17 end to end with the default front end (MOTA, IDF1)")
     ap.add_argument("--sort-side", nargs=2, metavar=("DETS", "OUT"), help=argparse.SUPPRESS)

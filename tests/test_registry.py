@@ -103,10 +103,15 @@ def test_the_distance_registry_is_the_one_table_of_default_gates() -> None:
     for name, choice in registry.DISTANCES.items():
         assert DISTANCES[name].gate == default_gate(name) == choice.gate
         assert resolve_gate(name) == choice.gate and resolve_gate(name, 2.5) == 2.5
-        # what track-detections runs for --distance NAME without --gate: the table's gate
+        # what track-detections runs for --distance NAME without --gate: the table's gate,
+        # its box_gate where it has one (euclidean: 9.21 on the distance in box sizes)
         config = preset("default", fps=30.0, distance=name)
-        assert resolve_gate(config.distance, config.gate) == choice.gate
-        assert Tracker(config).threshold == choice.gate
+        assert config.gate is None
+        tracker_default = choice.gate if choice.box_gate is None else choice.box_gate
+        assert Tracker(config).threshold == tracker_default
+        assert (Tracker(config)._box_var > 0) == (choice.box_gate is not None)
+    assert registry.DISTANCES["euclidean"].box_gate == 9.21
+    assert [n for n, c in registry.DISTANCES.items() if c.box_gate is not None] == ["euclidean"]
     assert preset("default").gate is None  # the default preset takes the table's too
     with pytest.raises(ValueError, match="choose one of: euclidean, uncoupled"):
         registry.default_gate("cosine")
@@ -117,8 +122,12 @@ def test_gate_help_gives_every_default_gate(capsys) -> None:
 
     assert GATE_HELP == registry.gate_help()
     for name, choice in registry.DISTANCES.items():
-        assert name in GATE_HELP and f"{choice.gate:g} ({choice.unit})" in GATE_HELP
-    assert "100 (px²)" in GATE_HELP and "'10px'" in GATE_HELP
+        assert name in GATE_HELP
+        if choice.box_gate is None:
+            assert f"{choice.gate:g} ({choice.unit})" in GATE_HELP
+    # the tracker's Euclidean default is in box sizes; a gate given is px² (paper 1's 20 px)
+    assert "euclidean 9.21 (χ² in box sizes)" in GATE_HELP
+    assert "100 (px²)" not in GATE_HELP and "'20px'" in GATE_HELP
     assert main(["track-detections", "--help"]) == 0
     # the help is wrapped to the terminal, also after the hyphen of a name (kalman-⏎coupled)
     text = re.sub(r"-\s+", "-", " ".join(capsys.readouterr().out.split()))

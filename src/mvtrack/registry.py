@@ -107,10 +107,16 @@ class DistanceChoice(Choice):
         The gate applied when none is given: pairs whose distance value is ``<= gate`` pass.
     unit : str
         What the gate measures, for help texts.
+    box_gate : float or None
+        The tracker's gate where none is given, when it differs from ``gate``: a χ² on the
+        distance measured in box sizes (``euclidean``,
+        :func:`mvtrack.association.gate.tracker_gate`); ``gate`` stays the default of the
+        functions that take a gate in the distance's own units.
     """
 
     gate: float = 0.0
     unit: str = ""
+    box_gate: float | None = None
 
 
 #: χ² quantile of 2 degrees of freedom at 99 %, the gate of the Mahalanobis-type distances
@@ -119,10 +125,12 @@ CHI2_2DOF_99 = 9.21
 #: association distances (:data:`mvtrack.association.DISTANCES`) and their default gates; the
 #: tracker's default is ``mahalanobis`` at 9.21 (99 % of a χ² with 2 degrees of freedom on the
 #: filter's innovation covariance, :mod:`mvtrack.association.gate`); the Euclidean 100 px² (a
-#: 10 px circle) is paper 1's synthetic experiment's (its real videos use 20 px, ``paper1``)
+#: 10 px circle) is paper 1's synthetic experiment's (its real videos use 20 px, ``paper1``);
+#: a tracker given no gate measures the Euclidean distance in box sizes and gates it at 9.21
 DISTANCES: dict[str, DistanceChoice] = {
     "euclidean": DistanceChoice(
-        "squared centre distance (papers 1 and 2)", gate=100.0, unit="px²"
+        "squared centre distance (papers 1 and 2)", gate=100.0, unit="px²",
+        box_gate=CHI2_2DOF_99,
     ),
     "uncoupled": DistanceChoice(
         "per-axis normalised squared distance, eq. (8) of paper 2", gate=CHI2_2DOF_99, unit="χ²"
@@ -164,16 +172,16 @@ def default_gate(name: str) -> float:
 
 
 def gate_help() -> str:
-    """Help text of the ``--gate`` option, with every distance's default gate."""
+    """Help text of the ``--gate`` option, with the tracker's default gate of every distance."""
     by_value: dict[tuple[float, str], list[str]] = {}
     for name, d in DISTANCES.items():
-        by_value.setdefault((d.gate, d.unit), []).append(name)
+        key = (d.gate, d.unit) if d.box_gate is None else (d.box_gate, "χ² in box sizes")
+        by_value.setdefault(key, []).append(name)
     defaults = "; ".join(
         f"{'/'.join(names)} {gate:g} ({unit})" for (gate, unit), names in by_value.items()
     )
-    radius = DISTANCES["euclidean"].gate ** 0.5
     return (
-        f"Gate on the distance's value (euclidean: px², '{radius:g}px' for a radius). "
+        "Gate on the distance's value (euclidean: px², '20px' for a radius). "
         f"Defaults: {defaults}. Default: the preset's, else the distance's."
     )
 

@@ -294,5 +294,5 @@ def test_naming_the_presets_own_distance_changes_nothing() -> None:
     paper = build_tracker_config(RunSettings(tracker={"preset": "paper1",
                                                       "distance": "euclidean"}), 30.0)
     assert paper == preset("paper1", fps=30.0) and paper.gate == 400.0  # 20 px
-    assert preset("default", fps=30.0, distance="euclidean").gate is None  # its own: 10 px
+    assert preset("default", fps=30.0, distance="euclidean").gate is None  # its own: in box sizes
     assert preset("default", fps=30.0, distance="iou").gate is None  # another distance: its own

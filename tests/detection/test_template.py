@@ -354,6 +354,17 @@ def test_search_radius_is_each_tracks_gate() -> None:
     assert 1.5 < large / small < 2.5  # the box twice as large: about twice the radius
     missed = _tracked(tracking.TrackerConfig(fps=30.0), misses=3)
     assert (search_radii(missed, missed.tracks.uid, 20.0) > radii[::-1]).all()
+    # the Euclidean gate without a gate is in box sizes: sqrt(9.21 s²) times the longer side
+    # of the box (18 × 12 and 36 × 24 px), whatever the track's misses
+    from mvtrack.association.gate import euclidean_box_variance
+
+    config = tracking.TrackerConfig(fps=30.0, distance="euclidean")
+    s2 = euclidean_box_variance(config.measurement_noise, config.velocity_prior,
+                                config.accel_noise, 30.0)
+    for m in (0, 3):
+        euc = _tracked(config, misses=m)
+        np.testing.assert_allclose(search_radii(euc, euc.tracks.uid, 20.0),
+                                   np.sqrt(9.21 * s2) * np.array([18.0, 36.0]), rtol=1e-9)
     # the IoU gate is no region about the prediction: the bank's own radius
     iou = _tracked(tracking.TrackerConfig(fps=30.0, distance="iou"))
     assert search_radii(iou, iou.tracks.uid, 20.0) == pytest.approx(20.0)

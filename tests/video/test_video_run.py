@@ -392,6 +392,9 @@ def test_the_video_sets_the_image_size_and_leaves_the_tracker_alone() -> None:
     for s, size in ((small, (320.0, 240.0)), (big, (640.0, 480.0))):
         assert build_tracker_config(s, 30.0) == TrackerConfig(fps=30.0)
         assert build_tracker(s, 30.0).frame_size == size
+        assert build_tracker(s, 30.0).fused  # mvtrack track runs the compiled step
+    default = resolve_settings(RunSettings(), (768, 576), fps=10.0)  # road-users, vtest.avi
+    assert build_tracker(default, 10.0).fused
     mine = resolve_settings(
         RunSettings(tracker={"gate": 50.0, "measurement_noise": 0.2}, detector=DM,
                     detector_params={"min_area": 5.0}), (640, 480))
@@ -407,6 +410,19 @@ def test_the_video_sets_the_image_size_and_leaves_the_tracker_alone() -> None:
     # the scene front end sizes its own blob stage (working pixels, closing from its prior)
     scene = resolve_settings(RunSettings(detector="scene"), (640, 480))
     assert scene.detector_params == {} and scene.tracker == big.tracker
+    # the road-user front end: the smallest blob follows the image (ROAD_USERS_AREA s²,
+    # in its working pixels), its closing from the objects it learns; the user's value kept
+    road = resolve_settings(RunSettings(detector="road-users"), (640, 480), fps=10.0)
+    assert road.detector_params == {"min_area": 160.0, "absorb_after": 600,
+                                    "ghost_every": 20}
+    assert resolve_settings(RunSettings(detector="road-users"), (1224, 370)
+                            ).detector_params["min_area"] == 236.0  # KITTI-17: s² = 5.90
+    half = resolve_settings(RunSettings(detector="road-users", detector_params={"scale": 0.5}),
+                            (640, 480))
+    assert half.detector_params["min_area"] == 40.0  # 160 frame pixels at half scale
+    own = resolve_settings(
+        RunSettings(detector="road-users", detector_params={"min_area": 12.0}), (640, 480))
+    assert own.detector_params["min_area"] == 12.0
 
 
 def test_progress_bar_goes_to_stderr_only_when_asked(capsys) -> None:

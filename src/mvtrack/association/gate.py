@@ -14,7 +14,11 @@ prediction (:func:`shapes`):
 - ``mahalanobis`` (the default): ``C = S = P̄ + R``, the filter's innovation covariance, so
   the gate opens as the prediction grows uncertain (a lost track, a new track whose velocity is
   not known yet) and closes as the filter settles; ``g`` a χ² quantile (9.21: 99 %);
-- ``euclidean`` (eq. (8) of paper 2, paper 1's circular mask): ``C = I``, ``g`` in px²;
+- ``euclidean`` (eq. (8) of paper 2, paper 1's circular mask): ``C = I``, ``g`` in px², where
+  a gate is given (paper 1's 20 px circle); a tracker without one measures the distance in
+  box sizes, ``C = s² diag(w², h²)`` with ``g`` the χ² 9.21 and ``s²`` the innovation variance
+  of a new track (:func:`euclidean_box_variance`), so that the gate means the same for a
+  pedestrian of 40 px and a bus of 400 px, in any image and at any frame rate;
 - ``uncoupled`` (eq. (9) of paper 2): ``C = diag(P̄x, P̄y)``;
 - ``coupled`` (eq. (10) of paper 2 corrected, SPEC §2.3): ``C = R_θ diag(ρ² σ², σ²) R_θᵀ``,
   σ² = (P̄x + P̄y)/2, θ the direction of the predicted velocity (eq. (9)'s ellipse where the
@@ -39,9 +43,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.association.distances import get_distance
+from mvtrack.association.distances import get_distance, resolve_gate
 from mvtrack.association.pairs import BY_MATRIX, BY_OVERLAP, BY_QUADRATIC, frame_pairs
 from mvtrack.association.view import TrackView
+from mvtrack.registry import DISTANCES
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -51,7 +56,9 @@ __all__ = [
     "SHAPE_PARAMS",
     "Gate",
     "GateRegions",
+    "euclidean_box_variance",
     "shapes",
+    "tracker_gate",
     "warmup_centre",
 ]
 
@@ -62,14 +69,16 @@ SHAPE_PARAMS = ("rho", "min_speed", "use_innovation")
 
 
 def shapes(distance: str, cov: FloatArray, S: FloatArray, velocity: FloatArray, *,
-           rho: float = 2.0, min_speed: float = 0.5, use_innovation: bool | None = None
-           ) -> FloatArray:
+           rho: float = 2.0, min_speed: float = 0.5, use_innovation: bool | None = None,
+           wh: FloatArray | None = None, box_var: float = 0.0) -> FloatArray:
     """The gate covariance ``C`` (K, 2, 2) of each track for a quadratic ``distance``.
 
     ``cov`` and ``S`` are the predicted position covariance P̄ and the innovation covariance
     (K, 2, 2), ``velocity`` the predicted velocity (K, 2) px/frame; ``rho``, ``min_speed`` and
     ``use_innovation`` as in :mod:`mvtrack.association.distances` (``use_innovation``
-    defaults to True for ``mahalanobis`` only). Other distances give NaN.
+    defaults to True for ``mahalanobis`` only). ``euclidean`` is ``I`` (pixels), or with
+    ``box_var = s² > 0`` and the boxes ``wh`` (K, 2), ``s² diag(w², h²)`` (box sizes). Other
+    distances give NaN.
     """
     k = cov.shape[0]
     if use_innovation is None:
@@ -80,6 +89,11 @@ def shapes(distance: str, cov: FloatArray, S: FloatArray, velocity: FloatArray, 
     diag[:, 0, 0], diag[:, 1, 1] = var[:, 0], var[:, 1]
     if distance == "euclidean":
         out = np.zeros((k, 2, 2))
+        if box_var > 0:
+            if wh is None:
+                raise ValueError("euclidean gate in box sizes: the boxes wh are needed")
+            out[:, 0, 0], out[:, 1, 1] = box_var * wh[:, 0] ** 2, box_var * wh[:, 1] ** 2
+            return out  # eq. (8) of paper 2 in box sizes: (Δx / w)² + (Δy / h)², over s²
         out[:, 0, 0] = out[:, 1, 1] = 1.0  # eq. (8) of paper 2
         return out
     if distance == "uncoupled":
@@ -100,6 +114,45 @@ def shapes(distance: str, cov: FloatArray, S: FloatArray, velocity: FloatArray, 
     if distance == "mahalanobis":
         return np.array(base, dtype=np.float64)
     return np.full((k, 2, 2), np.nan)
+
+
+def euclidean_box_variance(measurement_noise: float, velocity_prior: float,
+                           accel_noise: float, fps: float) -> float:
+    r"""``s²``, box sizes²: the variance of a Euclidean gate in box sizes (:func:`shapes`).
+
+    .. math:: s^2 = 2 σ_z^2 + (σ_v / f)^2 + (σ_a / f^2)^2 / 4
+
+    with ``σ_z`` the measurement noise (box sizes), ``σ_v`` the velocity prior (box sizes/s),
+    ``σ_a`` the acceleration noise (box sizes/s²) and ``f`` the frame rate: the innovation
+    variance, per axis in box sizes, of a track one frame after its first detection under the
+    constant-velocity filter with the tracker's size-scaled noise (P₀ = diag(σ_z², (σ_v/f)²),
+    eq. (7) of paper 1 for one frame, ``S = P̄ + R``). A Euclidean gate does not follow the
+    filter's uncertainty; this one is the default's first gate of a new track, held for the
+    track's whole life: in box sizes it is the same in any image, and it opens at a low frame
+    rate as far as a new object may move in a frame. At 25 fps with the default noise it is
+    ``s² = 0.0236``, a gate of ``√(9.21 s²) = 0.47`` box sizes.
+    """
+    f = float(fps)
+    return float(2.0 * measurement_noise**2 + (velocity_prior / f) ** 2
+                 + 0.25 * (accel_noise / f**2) ** 2)
+
+
+def tracker_gate(distance: str, gate: float | None, measurement_noise: float,
+                 velocity_prior: float, accel_noise: float, fps: float) -> tuple[float, float]:
+    """A tracker's threshold ``g`` and Euclidean box variance ``s²`` (0: pixels).
+
+    An explicit ``gate`` is the distance's own units (px² for ``euclidean``: paper 1's
+    circle); without one, a distance with a ``box_gate`` in :data:`mvtrack.registry.DISTANCES`
+    (``euclidean``: the χ² 9.21) is gated on the distance in box sizes with ``s²`` of
+    :func:`euclidean_box_variance`, and every other distance takes its default
+    (:func:`mvtrack.association.distances.resolve_gate`). The noise settings are those of
+    :class:`mvtrack.tracking.TrackerConfig` (box sizes and seconds).
+    """
+    box_gate = DISTANCES[distance].box_gate if distance in DISTANCES else None
+    if gate is None and box_gate is not None:
+        return box_gate, euclidean_box_variance(measurement_noise, velocity_prior,
+                                                accel_noise, fps)
+    return resolve_gate(distance, gate), 0.0
 
 
 def warmup_centre(
@@ -181,10 +234,12 @@ class Gate:
 
     @classmethod
     def build(cls, distance: str, view: TrackView, threshold: float, *,
-              size_weight: float = 0.0, **params: Any) -> Gate:
-        """The gate of ``distance`` for the tracks of ``view``."""
+              size_weight: float = 0.0, box_var: float = 0.0, **params: Any) -> Gate:
+        """The gate of ``distance`` for the tracks of ``view`` (``box_var``: the Euclidean
+        gate in box sizes, :func:`shapes`)."""
         shape_params = {p: v for p, v in params.items() if p in SHAPE_PARAMS}
-        C = shapes(distance, view.cov, view.S, view.velocity, **shape_params)
+        C = shapes(distance, view.cov, view.S, view.velocity, wh=view.wh, box_var=box_var,
+                   **shape_params)
         cov = np.stack([C[:, 0, 0], 0.5 * (C[:, 0, 1] + C[:, 1, 0]), C[:, 1, 1]], axis=1)
         return cls(distance, view, float(threshold), np.ascontiguousarray(cov),
                    float(size_weight), dict(params))

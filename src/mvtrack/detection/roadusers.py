@@ -84,7 +84,8 @@ class RoadUserDetector:
     scale : float, default 1
         Working scale: the frame is reduced by it before modelling (``cv2.INTER_AREA``).
     min_area : float, default 40
-        Smallest blob, working pixels.
+        Smallest blob, working pixels (the video pipeline gives ``40 s²`` pixels of the
+        frame, ``s² = W H / 320·240``: :data:`mvtrack.video.settings.ROAD_USERS_AREA`).
     close_size : int, default 5
         Diameter of the elliptic closing, working pixels (0 or 1: none), until the kinds are
         known.
@@ -97,12 +98,20 @@ class RoadUserDetector:
     over, min_part, valley : float, default 1.8, 0.5, 0.5
         Waist cutting (:func:`~mvtrack.detection.waists.cut_at_waists`); ``over`` and
         ``valley`` chosen by leave-one-out (4 and 3 folds of 5).
-    small : float, default 0.2
-        Boxes whose area is below this share of every kind's where they stand are dropped.
+    small : float, default 0.35
+        Boxes whose area is below this share of every kind's where they stand are dropped
+        (chosen by leave-one-out end to end: every fold).
     max_z : float, default 3
         A part of a cut blob must be one object of some kind within this distance
         (:meth:`~mvtrack.detection.kinds.KindModel.match`), else the blob stays whole
         (leave-one-out: every fold).
+    wings : float, default 0.3
+        Flat wings at a blob's base (a cast shadow, walkers joined by their shadows) lower
+        than this share of the blob's height are cut off
+        (:func:`~mvtrack.detection.wings.cut_flat_wings`; leave-one-out end to end: 4 folds).
+    travel : float, default 0.25
+        Box sizes a track travels from where it was born before it is shown, held and learnt
+        from (:class:`~mvtrack.detection.travel.Travel`; leave-one-out end to end: every fold).
     hold : bool, default True
         Keep the pixels inside the boxes the tracker predicts for its confirmed tracks out
         of the background's update (mean and noise), up to ``absorb_after`` frames: a car
@@ -133,7 +142,7 @@ class RoadUserDetector:
         over: float = 1.8,
         min_part: float = 0.5,
         valley: float = 0.5,
-        small: float = 0.5,
+        small: float = 0.35,
         max_z: float = 3.0,
         close_frac: float = 0.2,
         close_bands: int = 8,

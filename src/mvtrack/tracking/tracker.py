@@ -35,8 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.association.assign import HIGH, LOW, RULE_CODES, associate
-from mvtrack.association.distances import resolve_gate
-from mvtrack.association.gate import Gate, GateRegions, warmup_centre
+from mvtrack.association.gate import Gate, GateRegions, tracker_gate, warmup_centre
 from mvtrack.association.view import TrackView
 from mvtrack.filters.imm import IMMState
 from mvtrack.filters.predictors import make_predictor
@@ -156,7 +155,8 @@ class Tracker:
         f2 = 1.0 / c.fps**2
         self._accel = np.array([c.accel_noise * f2, c.manoeuvre_noise * f2])
         self._pi = self.predictor.transitions() if imm else None
-        self.threshold = resolve_gate(c.distance, c.gate)
+        self.threshold, self._box_var = tracker_gate(
+            c.distance, c.gate, c.measurement_noise, c.velocity_prior, c.accel_noise, c.fps)
         self._size_w = 0.0 if c.size_noise is None else 1.0 / c.size_noise**2
         self._rule = RULE_CODES[c.assign]
         self._params = c.life_cycle(self.frame_size)
@@ -367,7 +367,7 @@ class Tracker:
         S = pred.innovation_cov(ps, c.noise(wh)[0]) if self.scales else pred.innovation_cov(ps)
         view = TrackView(centre, cov, S, pred.velocity(ps), wh)
         return Gate.build(c.distance, view, self.threshold, size_weight=self._size_w,
-                          **c.distance_params)
+                          box_var=self._box_var, **c.distance_params)
 
     def gates(self) -> GateRegions:
         """The gates the next :meth:`step` applies, one per live track (tentative included),

@@ -20,6 +20,12 @@ HOLD_SECONDS = 60.0
 #: seconds between two ghost tests of the road-user front end
 GHOST_SECONDS = 2.0
 
+#: the road-user front end's smallest blob, in pixels of the papers' 320×240 image (scaled
+#: by ``s²``, as the other front ends' ``min_area = 40 s²``): chosen by leave-one-out over
+#: the four US-101 clips and KITTI-17 end to end (``benchmarks/bench_vehicles.py
+#: --loo-e2e``, docs/bench/vehicles.md)
+ROAD_USERS_AREA = 40.0
+
 
 def resolve_settings(
     settings: RunSettings, size: tuple[int, int], fps: float = 30.0
@@ -53,7 +59,9 @@ def resolve_settings(
 
     - for the road-user front end (``"road-users"``): a pixel that stays foreground (a car
       that waits) is absorbed after ``HOLD_SECONDS`` (``absorb_after``, frames at ``fps``),
-      and ghosts are looked for every ``GHOST_SECONDS`` (``ghost_every``).
+      and ghosts are looked for every ``GHOST_SECONDS`` (``ghost_every``); its smallest
+      blob is ``ROAD_USERS_AREA s²`` pixels of the frame (``min_area``, given in its
+      working pixels: times ``scale²``), its closing sized from the objects it learns.
 
     The tracker values are only scaled up: images smaller than 320×240 keep them.
 
@@ -70,6 +78,8 @@ def resolve_settings(
         det.setdefault("min_area", float(round(40.0 * s2)))
         det.setdefault("close_size", 7)
     if settings.detector == "road-users":  # its times in seconds, at the video's rate
+        scale = float(det.get("scale", 1.0))
+        det.setdefault("min_area", float(round(ROAD_USERS_AREA * s2 * scale * scale)))
         det.setdefault("absorb_after", min(max(1, round(HOLD_SECONDS * fps)), 65534))
         det.setdefault("ghost_every", max(1, round(GHOST_SECONDS * fps)))
     if settings.detector == "disturbance-map":
