@@ -4,6 +4,7 @@ masks ``mvtrack track --masks`` writes."""
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
@@ -11,7 +12,7 @@ from scipy.optimize import linear_sum_assignment
 from mvtrack.detection import make_detector
 from mvtrack.detection.colourbg import ColourBackground
 from mvtrack.detection.kinds import KindModel, robust_plane
-from mvtrack.detection.roadusers import RoadUserDetector
+from mvtrack.detection.roadusers import RoadUserDetector, close_around
 from mvtrack.detection.waists import cut_at_waists, join_fragments
 from mvtrack.eval import iou_matrix
 from mvtrack.sim.dense import scene_from_dense
@@ -592,3 +593,23 @@ def test_a_flag_flapping_in_place_is_never_shown_the_walker_is(tmp_path, travel:
     assert (rows[:, 2] > 50).all()  # nothing at the flag (rows 20 to 28)
     ids, counts = np.unique(rows[:, 0], return_counts=True)
     assert len(ids) == 1 and counts[0] >= 55  # in view from frame 16 (came in at the border)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_closing_around_the_foreground_equals_opencvs_closing(seed: int) -> None:
+    """The closing computed over the foreground's widened box only is OpenCV's closing of the
+    whole image: blobs near the borders and far from them, upright and wide ellipses, an
+    empty mask."""
+    rng = np.random.default_rng(seed)
+    h, w = rng.integers(20, 90, 2)
+    mask = np.zeros((h, w), np.uint8)
+    for _ in range(rng.integers(0, 6)):
+        y, x = rng.integers(0, h), rng.integers(0, w)
+        mask[y : y + rng.integers(1, 12), x : x + rng.integers(1, 12)] = 255
+    mask[rng.random((h, w)) < 0.01] = 255
+    for kw, kh in ((1, 7), (7, 3), (5, 5), (11, 9), (3, 1)):
+        kern = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kw, kh))
+        expected = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kern)
+        np.testing.assert_array_equal(close_around(mask, kern), expected)
+    empty = np.zeros((9, 9), np.uint8)
+    np.testing.assert_array_equal(close_around(empty, np.ones((3, 3), np.uint8)), empty)

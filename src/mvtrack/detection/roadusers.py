@@ -346,7 +346,7 @@ class RoadUserDetector:
         if not kinds.ready or self.close_frac <= 0:
             if self._close is None:
                 return mask
-            return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._close)
+            return close_around(mask, self._close)
         h, w = mask.shape
         n = self.close_bands
         edges = np.linspace(0, h, n + 1).round().astype(int)
@@ -364,7 +364,7 @@ class RoadUserDetector:
                 continue
             a0, a1 = max(y0 - kh, 0), min(y1 + kh, h)
             kern = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kw, kh))
-            closed = cv2.morphologyEx(mask[a0:a1], cv2.MORPH_CLOSE, kern)
+            closed = close_around(mask[a0:a1], kern)
             out[y0:y1] = closed[y0 - a0 : y1 - a0]
         return out
 
@@ -469,6 +469,27 @@ class RoadUserDetector:
         # or standing above the horizon
         ok = ((share.max(axis=1) >= self.small) | self._at_border(inp)) & kinds.standing(inp)
         return boxes[ok], flags[ok], area[ok]
+
+
+def close_around(mask: Image, kernel: Image) -> Image:
+    """``cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)``, computed only over the bounding
+    box of the foreground widened by the kernel's size on every side (clipped to the image).
+
+    The same image: a closing's dilation reaches at most half the kernel beyond the
+    foreground and its erosion at most half the kernel further, and both treat the pixels
+    beyond an edge of the window as the full image's pixels there are treated (all zero
+    outside the widened box; the image's own border where the window meets it). The
+    kernel must hold its centre (OpenCV's shapes do)."""
+    x, y, bw, bh = cv2.boundingRect(mask)
+    out = np.zeros_like(mask)
+    if bw == 0:
+        return out
+    h, w = mask.shape
+    kh, kw = kernel.shape
+    x0, x1 = max(x - kw, 0), min(x + bw + kw, w)
+    y0, y1 = max(y - kh, 0), min(y + bh + kh, h)
+    out[y0:y1, x0:x1] = cv2.morphologyEx(mask[y0:y1, x0:x1], cv2.MORPH_CLOSE, kernel)
+    return out
 
 
 def _label(mask: Image) -> tuple[NDArray[np.integer], NDArray[np.int32]]:
