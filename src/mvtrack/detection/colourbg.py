@@ -240,8 +240,8 @@ class ColourBackground:
         noise = cv2.convertScaleAbs(cv2.sqrt(self.var), alpha=self.k_sigma)  # λ σ
         floor = cv2.LUT(_channel_max(self._mu8), self._floor_table)
         self._thr = cv2.min(cv2.max(noise, floor), 254.0)
-        if self.ghost_every:  # the background's edges, for the ghost test
-            self._mu_edges = _edges(cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY))
+        # the background's edges, for the ghost test: made when a test first needs them
+        self._mu_edges: NDArray[np.float32] | None = None
         if self.shadows:  # the grey background (padded) and its local spread, for shadows
             self._mu_grey = cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY)
             self._mu_grey_pad = cv2.copyMakeBorder(self._mu_grey, 1, 1, 1, 1,
@@ -356,16 +356,17 @@ class ColourBackground:
         if self.shadow_step == 1:
             fg.reshape(-1)[idx[shadow]] = 0
             return
-        # each tested pixel speaks for its cell of the grid: the cells of the shadow pixels
-        # are cleared where they were candidates
+        # each tested pixel speaks for its cell of the grid (its own pixel is the cell's top
+        # left): the cells of the shadow pixels are cleared where they were candidates
         step = self.shadow_step
-        cells = np.zeros_like(grid)
         at = idx[shadow]
-        cells.reshape(-1)[(at // w // step) * grid.shape[1] + at % w // step] = 255
-        full = cv2.resize(cells, None, fx=step, fy=step, interpolation=cv2.INTER_NEAREST)
-        full = full[: fg.shape[0], : fg.shape[1]]
-        clear = cv2.bitwise_and(full, cand[: full.shape[0], : full.shape[1]])
-        cv2.bitwise_and(fg, cv2.bitwise_not(clear), dst=fg)
+        y, x = np.divmod(at, w)
+        dy, dx = np.divmod(np.arange(step * step), step)
+        yy, xx = y[:, None] + dy, x[:, None] + dx
+        inside = (yy < fg.shape[0]) & (xx < w)
+        cell = yy[inside] * w + xx[inside]
+        cell = cell[cand.reshape(-1)[cell] != 0]
+        fg.reshape(-1)[cell] = 0
 
     def _remove_ghosts(self, img: Image, fg: Image) -> None:
         """Ghost blobs of ``fg`` reset to the frame and cleared: the test of
@@ -382,14 +383,18 @@ class ColourBackground:
         still = cv2.compare(self._run, float(max(self.ghost_every - self.refresh, 1)),
                             cv2.CMP_GE)
         fg_still = cv2.bitwise_and(fg, still)
-        n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_32S)
+        try:  # 16-bit labels (dilated as they are) unless there are more than 65535 blobs
+            n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_16U)
+        except cv2.error:
+            n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_32S)
         if n <= 1:
             return
         out, fg = fg, fg_still
         # the outline as a band across the blob's border (the neighbourhood test of eq. (1)
         # leaves a blob a pixel inside the object's edge), labelled by the nearest blob
         outline = cv2.subtract(cv2.dilate(fg, None), cv2.erode(fg, None))
-        labels = cv2.dilate(labels.astype(np.float32), None).astype(np.int32)
+        labels = cv2.dilate(labels if labels.dtype == np.uint16 else labels.astype(np.float32),
+                            None).astype(np.int32)
         pts = cv2.findNonZero(outline)
         if pts is None:
             return
@@ -399,6 +404,8 @@ class ColourBackground:
         grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                                   cv2.BORDER_REPLICATE)
         e_frame = _sobel_at(grey, idx + (idx // w) * 2 + (w + 2) + 1, w + 2)
+        if self._mu_edges is None:  # the background's of the last refresh
+            self._mu_edges = _edges(cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY))
         e_back = self._mu_edges.reshape(-1)[idx]
         lab = labels.reshape(-1)[idx]
         s_frame = np.bincount(lab, e_frame, minlength=n)
