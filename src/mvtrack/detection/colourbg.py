@@ -393,8 +393,10 @@ class ColourBackground:
         # the outline as a band across the blob's border (the neighbourhood test of eq. (1)
         # leaves a blob a pixel inside the object's edge), labelled by the nearest blob
         outline = cv2.subtract(cv2.dilate(fg, None), cv2.erode(fg, None))
-        labels = cv2.dilate(labels if labels.dtype == np.uint16 else labels.astype(np.float32),
-                            None).astype(np.int32)
+        if labels.dtype == np.uint16:
+            labels = cv2.dilate(labels, None)
+        else:
+            labels = cv2.dilate(labels.astype(np.float32), None).astype(np.int32)
         pts = cv2.findNonZero(outline)
         if pts is None:
             return
@@ -414,7 +416,12 @@ class ColourBackground:
         ghost[0] = 0
         if not ghost.any():
             return
-        sel = cv2.bitwise_and(ghost[labels], fg)
+        # each pixel's blob a ghost or not: a table look-up of 8-bit labels where they fit
+        if n <= 256:
+            on = cv2.LUT(labels.astype(np.uint8), np.pad(ghost, (0, 256 - n)))
+        else:
+            on = ghost[labels]
+        sel = cv2.bitwise_and(on, fg)
         # reset to the frame with the ring the neighbourhood test left out of the blob
         cv2.accumulateWeighted(img, self.mean, 1.0, mask=cv2.dilate(sel, None))
         cv2.bitwise_and(out, cv2.bitwise_not(sel), dst=out)
@@ -436,9 +443,9 @@ class ColourBackground:
 def _sobel_at(grey_pad: Image, at: NDArray[np.intp], stride: int) -> NDArray[np.float64]:
     """The 3×3 Sobel gradient magnitude of a grey image padded by one pixel (row length
     ``stride``) at the flat indices ``at`` only (as :func:`cv2.Sobel` with ``ksize=3``)."""
-    g = grey_pad.reshape(-1).astype(np.float64)
-    p = {(dy, dx): g[at + dy * stride + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1)
-         if (dy, dx) != (0, 0)}
+    g = grey_pad.reshape(-1)  # gathered first, then made floats: the points, not the image
+    p = {(dy, dx): g[at + dy * stride + dx].astype(np.float64) for dy in (-1, 0, 1)
+         for dx in (-1, 0, 1) if (dy, dx) != (0, 0)}
     gx = (p[-1, 1] + 2 * p[0, 1] + p[1, 1]) - (p[-1, -1] + 2 * p[0, -1] + p[1, -1])
     gy = (p[1, -1] + 2 * p[1, 0] + p[1, 1]) - (p[-1, -1] + 2 * p[-1, 0] + p[-1, 1])
     return np.hypot(gx, gy)
