@@ -11,7 +11,7 @@ from scipy.optimize import linear_sum_assignment
 
 from mvtrack.detection import make_detector
 from mvtrack.detection.colourbg import ColourBackground
-from mvtrack.detection.kinds import KindModel, robust_plane
+from mvtrack.detection.kinds import KindModel, _weighted_mean, robust_plane
 from mvtrack.detection.roadusers import RoadUserDetector, close_around
 from mvtrack.detection.waists import cut_at_waists, join_fragments
 from mvtrack.eval import iou_matrix
@@ -613,3 +613,14 @@ def test_closing_around_the_foreground_equals_opencvs_closing(seed: int) -> None
         np.testing.assert_array_equal(close_around(mask, kern), expected)
     empty = np.zeros((9, 9), np.uint8)
     np.testing.assert_array_equal(close_around(empty, np.ones((3, 3), np.uint8)), empty)
+
+
+def test_the_clusterings_weighted_mean_is_numpys_average_to_the_bit() -> None:
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 3, 17, 400, 1999):
+        points = rng.normal(size=(n, 2)) * rng.uniform(0.1, 100)
+        weight = rng.uniform(0, 1000, n) ** rng.uniform(0.5, 3)
+        expected = np.average(points, axis=0, weights=weight)
+        got = _weighted_mean(points, weight)
+        assert got.dtype == expected.dtype and got.shape == expected.shape
+        assert np.array_equal(got, expected)

@@ -325,16 +325,17 @@ class ColourBackground:
         w = fg.shape[1]
         pts = pts.reshape(-1, 2) * self.shadow_step
         idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
-        f = img.reshape(-1, 3)[idx].astype(np.int32) + 1
-        m = self._mu8.reshape(-1, 3)[idx].astype(np.int32) + 1
-        lf, lm = f.sum(axis=1), m.sum(axis=1)
+        f = img.reshape(-1, 3)[idx].astype(np.int64) + 1
+        m = self._mu8.reshape(-1, 3)[idx].astype(np.int64) + 1
+        lf, lm = f[:, 0] + f[:, 1] + f[:, 2], m[:, 0] + m[:, 1] + m[:, 2]  # (no short-axis sums)
         lo, hi = self.shadow_ratio
         sel = (lf >= lo * lm) & (lf <= hi * lm)
         if not sel.any():
             return
         idx, f, m, lf, lm = idx[sel], f[sel], m[sel], lf[sel], lm[sel]
         # the colour kept: Σ_c |f_c / L_f − m_c / L_m| < τ, multiplied out by L_f L_m
-        cross = np.abs(f * lm[:, None] - m * lf[:, None]).sum(axis=1)
+        cross = np.abs(f * lm[:, None] - m * lf[:, None])
+        cross = cross[:, 0] + cross[:, 1] + cross[:, 2]
         shadow = cross < self.shadow_chroma * (lf * lm).astype(np.float64)
         grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                                   cv2.BORDER_REPLICATE)
