@@ -12,7 +12,7 @@ from scipy.optimize import linear_sum_assignment
 from mvtrack.detection import make_detector
 from mvtrack.detection.colourbg import ColourBackground
 from mvtrack.detection.kinds import KindModel, _weighted_mean, robust_plane
-from mvtrack.detection.roadusers import RoadUserDetector, close_around
+from mvtrack.detection.roadusers import RoadUserDetector, _label, _label_all, close_around
 from mvtrack.detection.waists import cut_at_waists, join_fragments
 from mvtrack.eval import iou_matrix
 from mvtrack.sim.dense import scene_from_dense
@@ -624,3 +624,29 @@ def test_the_clusterings_weighted_mean_is_numpys_average_to_the_bit() -> None:
         got = _weighted_mean(points, weight)
         assert got.dtype == expected.dtype and got.shape == expected.shape
         assert np.array_equal(got, expected)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_labelling_the_band_of_foreground_rows_equals_labelling_the_image(threads: int) -> None:
+    """Labels and statistics (the background's too) as over every row: foreground in a band,
+    at the top or bottom edge, filling whole rows, none at all; one thread or two."""
+    rng = np.random.default_rng(threads)
+    old = cv2.getNumThreads()
+    cv2.setNumThreads(threads)
+    try:
+        for k in range(300):
+            mask = np.zeros((int(rng.integers(1, 70)), int(rng.integers(1, 70))), np.uint8)
+            mask[rng.random(mask.shape) < rng.uniform(0.0, 0.8)] = 255
+            if k % 2:
+                mask[: rng.integers(0, mask.shape[0] + 1)] = 0
+            if k % 3 == 0:
+                mask[rng.integers(0, mask.shape[0] + 1) :] = 0
+            if k % 5 == 0:
+                mask[rng.integers(0, mask.shape[0]) :] = 255
+            labels, stats = _label(mask)
+            expected_labels, expected_stats = _label_all(mask)
+            assert labels.dtype == expected_labels.dtype
+            np.testing.assert_array_equal(labels, expected_labels)
+            np.testing.assert_array_equal(stats, expected_stats)
+    finally:
+        cv2.setNumThreads(old)
