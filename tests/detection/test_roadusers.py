@@ -12,7 +12,7 @@ from scipy.optimize import linear_sum_assignment
 from mvtrack.detection import make_detector
 from mvtrack.detection.colourbg import ColourBackground
 from mvtrack.detection.kinds import KindModel, _weighted_mean, robust_plane
-from mvtrack.detection.roadusers import RoadUserDetector, _label, _label_all, close_around
+from mvtrack.detection.roadusers import RoadUserDetector, _label, _label_all, morph_around
 from mvtrack.detection.waists import cut_at_waists, join_fragments
 from mvtrack.eval import iou_matrix
 from mvtrack.sim.dense import scene_from_dense
@@ -596,10 +596,10 @@ def test_a_flag_flapping_in_place_is_never_shown_the_walker_is(tmp_path, travel:
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_closing_around_the_foreground_equals_opencvs_closing(seed: int) -> None:
-    """The closing computed over the foreground's widened box only is OpenCV's closing of the
-    whole image: blobs near the borders and far from them, upright and wide ellipses, an
-    empty mask."""
+def test_opening_and_closing_around_the_foreground_equal_opencvs(seed: int) -> None:
+    """The opening and the closing computed over the foreground's widened box only are
+    OpenCV's of the whole image: blobs near the borders and far from them, upright and wide
+    ellipses, an empty mask."""
     rng = np.random.default_rng(seed)
     h, w = rng.integers(20, 90, 2)
     mask = np.zeros((h, w), np.uint8)
@@ -607,12 +607,17 @@ def test_closing_around_the_foreground_equals_opencvs_closing(seed: int) -> None
         y, x = rng.integers(0, h), rng.integers(0, w)
         mask[y : y + rng.integers(1, 12), x : x + rng.integers(1, 12)] = 255
     mask[rng.random((h, w)) < 0.01] = 255
-    for kw, kh in ((1, 7), (7, 3), (5, 5), (11, 9), (3, 1)):
+    for kw, kh in ((1, 7), (7, 3), (5, 5), (11, 9), (3, 1), (3, 3)):
         kern = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kw, kh))
-        expected = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kern)
-        np.testing.assert_array_equal(close_around(mask, kern), expected)
+        for op in (cv2.MORPH_OPEN, cv2.MORPH_CLOSE):
+            expected = cv2.morphologyEx(mask, op, kern)
+            np.testing.assert_array_equal(morph_around(mask, op, kern), expected)
+        square = np.ones((kh, kw), np.uint8)
+        np.testing.assert_array_equal(morph_around(mask, cv2.MORPH_OPEN, square),
+                                      cv2.morphologyEx(mask, cv2.MORPH_OPEN, square))
     empty = np.zeros((9, 9), np.uint8)
-    np.testing.assert_array_equal(close_around(empty, np.ones((3, 3), np.uint8)), empty)
+    np.testing.assert_array_equal(
+        morph_around(empty, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), empty)
 
 
 def test_the_clusterings_weighted_mean_is_numpys_average_to_the_bit() -> None:

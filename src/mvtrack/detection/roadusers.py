@@ -329,7 +329,7 @@ class RoadUserDetector:
             self.flags = np.zeros(0, np.int8)
             self._mask = None
             return Detections.empty(k)
-        mask = cv2.morphologyEx(raw, cv2.MORPH_OPEN, self._open)
+        mask = morph_around(raw, cv2.MORPH_OPEN, self._open)
         mask = self._closing(mask)
         self._mask = mask
         boxes, flags, area = self._objects(mask)
@@ -346,7 +346,7 @@ class RoadUserDetector:
         if not kinds.ready or self.close_frac <= 0:
             if self._close is None:
                 return mask
-            return close_around(mask, self._close)
+            return morph_around(mask, cv2.MORPH_CLOSE, self._close)
         h, w = mask.shape
         n = self.close_bands
         edges = np.linspace(0, h, n + 1).round().astype(int)
@@ -364,7 +364,7 @@ class RoadUserDetector:
                 continue
             a0, a1 = max(y0 - kh, 0), min(y1 + kh, h)
             kern = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kw, kh))
-            closed = close_around(mask[a0:a1], kern)
+            closed = morph_around(mask[a0:a1], cv2.MORPH_CLOSE, kern)
             out[y0:y1] = closed[y0 - a0 : y1 - a0]
         return out
 
@@ -471,15 +471,18 @@ class RoadUserDetector:
         return boxes[ok], flags[ok], area[ok]
 
 
-def close_around(mask: Image, kernel: Image) -> Image:
-    """``cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)``, computed only over the bounding
-    box of the foreground widened by the kernel's size on every side (clipped to the image).
+def morph_around(mask: Image, op: int, kernel: Image) -> Image:
+    """``cv2.morphologyEx(mask, op, kernel)`` for an opening or a closing, computed only over
+    the bounding box of the foreground widened by the kernel's size on every side (clipped to
+    the image).
 
-    The same image: a closing's dilation reaches at most half the kernel beyond the
-    foreground and its erosion at most half the kernel further, and both treat the pixels
-    beyond an edge of the window as the full image's pixels there are treated (all zero
-    outside the widened box; the image's own border where the window meets it). The
-    kernel must hold its centre (OpenCV's shapes do)."""
+    The same image: the first pass reaches at most half the kernel beyond the foreground
+    and the second at most half the kernel further, and both treat the pixels beyond an edge
+    of the window as the full image's pixels there are treated (all zero outside the widened
+    box, where an erosion gives zero as well; the image's own border where the window meets
+    it). The kernel must hold its centre (OpenCV's shapes do)."""
+    if op not in (cv2.MORPH_OPEN, cv2.MORPH_CLOSE):
+        raise ValueError(f"morph_around: an opening or a closing, got operation {op}")
     x, y, bw, bh = cv2.boundingRect(mask)
     out = np.zeros_like(mask)
     if bw == 0:
@@ -488,7 +491,7 @@ def close_around(mask: Image, kernel: Image) -> Image:
     kh, kw = kernel.shape
     x0, x1 = max(x - kw, 0), min(x + bw + kw, w)
     y0, y1 = max(y - kh, 0), min(y + bh + kh, h)
-    out[y0:y1, x0:x1] = cv2.morphologyEx(mask[y0:y1, x0:x1], cv2.MORPH_CLOSE, kernel)
+    out[y0:y1, x0:x1] = cv2.morphologyEx(mask[y0:y1, x0:x1], op, kernel)
     return out
 
 

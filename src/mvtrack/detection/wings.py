@@ -72,12 +72,14 @@ def cut_flat_wings(
     h, w = labels.shape
     index = np.full(len(st), -1, np.intp)  # label -> index into ids
     index[ids] = np.arange(ids.size)
-    flat = labels.reshape(-1)
-    pix = np.flatnonzero(flat != 0)  # row by row (a boolean image is scanned fastest)
-    blob = index[flat[pix]]
+    r0 = int(st[ids, 1].min())  # the rows of the blobs asked for
+    band = labels[r0 : int((st[ids, 1] + st[ids, 3]).max())].reshape(-1)
+    pix = np.flatnonzero(band != 0)  # row by row (a boolean image is scanned fastest)
+    blob = index[band[pix]]
     inside = blob >= 0
     pix, blob = pix[inside], blob[inside]
     row, col = np.divmod(pix, w)
+    row += r0
     # one group per (blob, column) of the blob's box, blob by blob, columns left to right;
     # a blob's columns are contiguous (it is connected), an empty one is dropped anyway
     left, width = st[ids, 0].astype(np.intp), st[ids, 2].astype(np.intp)
