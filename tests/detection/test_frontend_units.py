@@ -156,6 +156,22 @@ def test_temporal_median_removes_a_person_present_in_a_minority_of_frames() -> N
         temporal_median([])
 
 
+@pytest.mark.parametrize("n", [1, 2, 3, 8, 9, 16, 17])
+def test_temporal_median_equals_numpys_median_rounded(n: int) -> None:
+    """The sorting network for a few frames against ``np.median`` (ties and halves included:
+    even counts take the mean of the two middle values, rounded half to even)."""
+    rng = np.random.default_rng(n)
+    frames = [rng.integers(0, 256, (12, 16, 3), dtype=np.uint8) for _ in range(n)]
+    frames += [rng.integers(100, 104, (12, 16, 3), dtype=np.uint8) for _ in range(n)]
+    copies = [f.copy() for f in frames]
+    expected = np.median(np.stack(frames), axis=0).round().astype(np.uint8)
+    got = temporal_median(frames, max_frames=64)
+    assert got.dtype == np.uint8
+    np.testing.assert_array_equal(got, expected)
+    for f, c in zip(frames, copies, strict=True):  # the frames given are left as they were
+        np.testing.assert_array_equal(f, c)
+
+
 # ---------------------------------------------------------------- adapters
 
 

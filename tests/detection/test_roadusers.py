@@ -4,14 +4,15 @@ masks ``mvtrack track --masks`` writes."""
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
 from mvtrack.detection import make_detector
 from mvtrack.detection.colourbg import ColourBackground
-from mvtrack.detection.kinds import KindModel, robust_plane
-from mvtrack.detection.roadusers import RoadUserDetector
+from mvtrack.detection.kinds import KindModel, _weighted_mean, robust_plane
+from mvtrack.detection.roadusers import RoadUserDetector, _label, _label_all, morph_around
 from mvtrack.detection.waists import cut_at_waists, join_fragments
 from mvtrack.eval import iou_matrix
 from mvtrack.sim.dense import scene_from_dense
@@ -645,3 +646,65 @@ def test_a_flag_flapping_in_place_is_never_shown_the_walker_is(tmp_path, travel:
     assert (rows[:, 2] > 50).all()  # nothing at the flag (rows 20 to 28)
     ids, counts = np.unique(rows[:, 0], return_counts=True)
     assert len(ids) == 1 and counts[0] >= 55  # in view from frame 16 (came in at the border)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_opening_and_closing_around_the_foreground_equal_opencvs(seed: int) -> None:
+    """The opening and the closing computed over the foreground's widened box only are
+    OpenCV's of the whole image: blobs near the borders and far from them, upright and wide
+    ellipses, an empty mask."""
+    rng = np.random.default_rng(seed)
+    h, w = rng.integers(20, 90, 2)
+    mask = np.zeros((h, w), np.uint8)
+    for _ in range(rng.integers(0, 6)):
+        y, x = rng.integers(0, h), rng.integers(0, w)
+        mask[y : y + rng.integers(1, 12), x : x + rng.integers(1, 12)] = 255
+    mask[rng.random((h, w)) < 0.01] = 255
+    for kw, kh in ((1, 7), (7, 3), (5, 5), (11, 9), (3, 1), (3, 3)):
+        kern = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kw, kh))
+        for op in (cv2.MORPH_OPEN, cv2.MORPH_CLOSE):
+            expected = cv2.morphologyEx(mask, op, kern)
+            np.testing.assert_array_equal(morph_around(mask, op, kern), expected)
+        square = np.ones((kh, kw), np.uint8)
+        np.testing.assert_array_equal(morph_around(mask, cv2.MORPH_OPEN, square),
+                                      cv2.morphologyEx(mask, cv2.MORPH_OPEN, square))
+    empty = np.zeros((9, 9), np.uint8)
+    np.testing.assert_array_equal(
+        morph_around(empty, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), empty)
+
+
+def test_the_clusterings_weighted_mean_is_numpys_average_to_the_bit() -> None:
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 3, 17, 400, 1999):
+        points = rng.normal(size=(n, 2)) * rng.uniform(0.1, 100)
+        weight = rng.uniform(0, 1000, n) ** rng.uniform(0.5, 3)
+        expected = np.average(points, axis=0, weights=weight)
+        got = _weighted_mean(points, weight)
+        assert got.dtype == expected.dtype and got.shape == expected.shape
+        assert np.array_equal(got, expected)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_labelling_the_band_of_foreground_rows_equals_labelling_the_image(threads: int) -> None:
+    """Labels and statistics (the background's too) as over every row: foreground in a band,
+    at the top or bottom edge, filling whole rows, none at all; one thread or two."""
+    rng = np.random.default_rng(threads)
+    old = cv2.getNumThreads()
+    cv2.setNumThreads(threads)
+    try:
+        for k in range(300):
+            mask = np.zeros((int(rng.integers(1, 70)), int(rng.integers(1, 70))), np.uint8)
+            mask[rng.random(mask.shape) < rng.uniform(0.0, 0.8)] = 255
+            if k % 2:
+                mask[: rng.integers(0, mask.shape[0] + 1)] = 0
+            if k % 3 == 0:
+                mask[rng.integers(0, mask.shape[0] + 1) :] = 0
+            if k % 5 == 0:
+                mask[rng.integers(0, mask.shape[0]) :] = 255
+            labels, stats = _label(mask)
+            expected_labels, expected_stats = _label_all(mask)
+            assert labels.dtype == expected_labels.dtype
+            np.testing.assert_array_equal(labels, expected_labels)
+            np.testing.assert_array_equal(stats, expected_stats)
+    finally:
+        cv2.setNumThreads(old)

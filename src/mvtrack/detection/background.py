@@ -198,7 +198,8 @@ class DisturbanceMap(FrontEnd):
 def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.uint8]:
     """The pixels of an image of ``shape`` (H, W) inside any of the boxes ``tlwh`` (K, 4), as
     a 0/255 mask. A box covers the pixels from ``floor(left)`` to ``ceil(left + width) - 1``,
-    the same for rows. No loop over the boxes: the indices of all their pixels at once when
+    the same for rows. No loop over the boxes: the flat indices of all their pixels at once
+    (each row of a box a run from its first pixel) when
     they cover little of the image; else each box adds ±1 at its four corners of a
     difference image, whose 2-D prefix sum (``cv2.integral``) counts the boxes over each
     pixel."""
@@ -210,12 +211,14 @@ def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.u
     bw, bh = np.maximum(x1 - x0, 0), np.maximum(y1 - y0, 0)
     n = bw * bh  # pixels per box
     total = int(n.sum())
-    if total <= h * w // 8:  # small boxes: write their pixels
+    if total <= h * w // 8:  # small boxes: write their pixels, row by row of each box
         out = np.zeros((h, w), np.uint8)
         if total:
-            off = np.arange(total) - np.repeat(np.cumsum(n) - n, n)  # index within the box
-            wr = np.repeat(np.maximum(bw, 1), n)
-            out[np.repeat(y0, n) + off // wr, np.repeat(x0, n) + off % wr] = 255
+            start = np.repeat(y0 * w + x0, bh)  # each row of each box: its first pixel ...
+            start += (np.arange(start.size) - np.repeat(np.cumsum(bh) - bh, bh)) * w
+            run = np.repeat(bw, bh)  # ... and its length
+            off = np.arange(total) - np.repeat(np.cumsum(run) - run, run)
+            out.reshape(-1)[np.repeat(start, run) + off] = 255
         return out
     corners = np.concatenate([y0 * (w + 1) + x0, y0 * (w + 1) + x1, y1 * (w + 1) + x0,
                               y1 * (w + 1) + x1])

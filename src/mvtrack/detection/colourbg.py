@@ -240,8 +240,8 @@ class ColourBackground:
         noise = cv2.convertScaleAbs(cv2.sqrt(self.var), alpha=self.k_sigma)  # λ σ
         floor = cv2.LUT(_channel_max(self._mu8), self._floor_table)
         self._thr = cv2.min(cv2.max(noise, floor), 254.0)
-        if self.ghost_every:  # the background's edges, for the ghost test
-            self._mu_edges = _edges(cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY))
+        # the background's edges, for the ghost test: made when a test first needs them
+        self._mu_edges: NDArray[np.float32] | None = None
         if self.shadows:  # the grey background (padded) and its local spread, for shadows
             self._mu_grey = cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY)
             self._mu_grey_pad = cv2.copyMakeBorder(self._mu_grey, 1, 1, 1, 1,
@@ -325,16 +325,17 @@ class ColourBackground:
         w = fg.shape[1]
         pts = pts.reshape(-1, 2) * self.shadow_step
         idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
-        f = img.reshape(-1, 3)[idx].astype(np.int32) + 1
-        m = self._mu8.reshape(-1, 3)[idx].astype(np.int32) + 1
-        lf, lm = f.sum(axis=1), m.sum(axis=1)
+        f = img.reshape(-1, 3)[idx].astype(np.int64) + 1
+        m = self._mu8.reshape(-1, 3)[idx].astype(np.int64) + 1
+        lf, lm = f[:, 0] + f[:, 1] + f[:, 2], m[:, 0] + m[:, 1] + m[:, 2]  # (no short-axis sums)
         lo, hi = self.shadow_ratio
         sel = (lf >= lo * lm) & (lf <= hi * lm)
         if not sel.any():
             return
         idx, f, m, lf, lm = idx[sel], f[sel], m[sel], lf[sel], lm[sel]
         # the colour kept: Σ_c |f_c / L_f − m_c / L_m| < τ, multiplied out by L_f L_m
-        cross = np.abs(f * lm[:, None] - m * lf[:, None]).sum(axis=1)
+        cross = np.abs(f * lm[:, None] - m * lf[:, None])
+        cross = cross[:, 0] + cross[:, 1] + cross[:, 2]
         shadow = cross < self.shadow_chroma * (lf * lm).astype(np.float64)
         grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                                   cv2.BORDER_REPLICATE)
@@ -356,16 +357,17 @@ class ColourBackground:
         if self.shadow_step == 1:
             fg.reshape(-1)[idx[shadow]] = 0
             return
-        # each tested pixel speaks for its cell of the grid: the cells of the shadow pixels
-        # are cleared where they were candidates
+        # each tested pixel speaks for its cell of the grid (its own pixel is the cell's top
+        # left): the cells of the shadow pixels are cleared where they were candidates
         step = self.shadow_step
-        cells = np.zeros_like(grid)
         at = idx[shadow]
-        cells.reshape(-1)[(at // w // step) * grid.shape[1] + at % w // step] = 255
-        full = cv2.resize(cells, None, fx=step, fy=step, interpolation=cv2.INTER_NEAREST)
-        full = full[: fg.shape[0], : fg.shape[1]]
-        clear = cv2.bitwise_and(full, cand[: full.shape[0], : full.shape[1]])
-        cv2.bitwise_and(fg, cv2.bitwise_not(clear), dst=fg)
+        y, x = np.divmod(at, w)
+        dy, dx = np.divmod(np.arange(step * step), step)
+        yy, xx = y[:, None] + dy, x[:, None] + dx
+        inside = (yy < fg.shape[0]) & (xx < w)
+        cell = yy[inside] * w + xx[inside]
+        cell = cell[cand.reshape(-1)[cell] != 0]
+        fg.reshape(-1)[cell] = 0
 
     def _remove_ghosts(self, img: Image, fg: Image) -> None:
         """Ghost blobs of ``fg`` reset to the frame and cleared: the test of
@@ -382,14 +384,20 @@ class ColourBackground:
         still = cv2.compare(self._run, float(max(self.ghost_every - self.refresh, 1)),
                             cv2.CMP_GE)
         fg_still = cv2.bitwise_and(fg, still)
-        n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_32S)
+        try:  # 16-bit labels (dilated as they are) unless there are more than 65535 blobs
+            n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_16U)
+        except cv2.error:
+            n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_32S)
         if n <= 1:
             return
         out, fg = fg, fg_still
         # the outline as a band across the blob's border (the neighbourhood test of eq. (1)
         # leaves a blob a pixel inside the object's edge), labelled by the nearest blob
         outline = cv2.subtract(cv2.dilate(fg, None), cv2.erode(fg, None))
-        labels = cv2.dilate(labels.astype(np.float32), None).astype(np.int32)
+        if labels.dtype == np.uint16:
+            labels = cv2.dilate(labels, None)
+        else:
+            labels = cv2.dilate(labels.astype(np.float32), None).astype(np.int32)
         pts = cv2.findNonZero(outline)
         if pts is None:
             return
@@ -399,6 +407,8 @@ class ColourBackground:
         grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                                   cv2.BORDER_REPLICATE)
         e_frame = _sobel_at(grey, idx + (idx // w) * 2 + (w + 2) + 1, w + 2)
+        if self._mu_edges is None:  # the background's of the last refresh
+            self._mu_edges = _edges(cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY))
         e_back = self._mu_edges.reshape(-1)[idx]
         lab = labels.reshape(-1)[idx]
         s_frame = np.bincount(lab, e_frame, minlength=n)
@@ -407,7 +417,12 @@ class ColourBackground:
         ghost[0] = 0
         if not ghost.any():
             return
-        sel = cv2.bitwise_and(ghost[labels], fg)
+        # each pixel's blob a ghost or not: a table look-up of 8-bit labels where they fit
+        if n <= 256:
+            on = cv2.LUT(labels.astype(np.uint8), np.pad(ghost, (0, 256 - n)))
+        else:
+            on = ghost[labels]
+        sel = cv2.bitwise_and(on, fg)
         # reset to the frame with the ring the neighbourhood test left out of the blob
         cv2.accumulateWeighted(img, self.mean, 1.0, mask=cv2.dilate(sel, None))
         cv2.bitwise_and(out, cv2.bitwise_not(sel), dst=out)
@@ -429,9 +444,9 @@ class ColourBackground:
 def _sobel_at(grey_pad: Image, at: NDArray[np.intp], stride: int) -> NDArray[np.float64]:
     """The 3×3 Sobel gradient magnitude of a grey image padded by one pixel (row length
     ``stride``) at the flat indices ``at`` only (as :func:`cv2.Sobel` with ``ksize=3``)."""
-    g = grey_pad.reshape(-1).astype(np.float64)
-    p = {(dy, dx): g[at + dy * stride + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1)
-         if (dy, dx) != (0, 0)}
+    g = grey_pad.reshape(-1)  # gathered first, then made floats: the points, not the image
+    p = {(dy, dx): g[at + dy * stride + dx].astype(np.float64) for dy in (-1, 0, 1)
+         for dx in (-1, 0, 1) if (dy, dx) != (0, 0)}
     gx = (p[-1, 1] + 2 * p[0, 1] + p[1, 1]) - (p[-1, -1] + 2 * p[0, -1] + p[1, -1])
     gy = (p[1, -1] + 2 * p[1, 0] + p[1, 1]) - (p[-1, -1] + 2 * p[-1, 0] + p[-1, 1])
     return np.hypot(gx, gy)

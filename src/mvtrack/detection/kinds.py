@@ -81,6 +81,13 @@ def _weighted_median(values: FloatArray, weight: FloatArray) -> float:
     return float(values[order][np.searchsorted(cum, 0.5 * cum[-1])])
 
 
+def _weighted_mean(points: FloatArray, weight: FloatArray) -> FloatArray:
+    """``np.average(points, axis=0, weights=weight)`` to the bit (the same products and sums
+    in the same order), without its checks: it is called in the clustering's inner loop."""
+    w = weight[:, None]
+    return np.multiply(points, w).sum(axis=0) / w.sum(axis=0)
+
+
 def _kmeans(points: FloatArray, weight: FloatArray, k: int, iterations: int = 20
             ) -> tuple[FloatArray, NDArray[np.intp]]:
     """Centres and labels of ``k`` weighted clusters (deterministic start: weighted quantiles
@@ -100,7 +107,7 @@ def _kmeans(points: FloatArray, weight: FloatArray, k: int, iterations: int = 20
         for j in range(k):  # k ≤ max_kinds (3) cluster means
             sel = labels == j
             if sel.any():
-                centres[j] = np.average(points[sel], axis=0, weights=weight[sel])
+                centres[j] = _weighted_mean(points[sel], weight[sel])
     return centres, labels
 
 
