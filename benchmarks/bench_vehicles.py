@@ -487,6 +487,20 @@ def kitti_end_to_end(frames: list[np.ndarray], work: Path,
     return out
 
 
+def _folds(label: str, grid: Any, f1: dict[Any, dict[str, float]], seqs: list[str]
+           ) -> dict[str, Any]:
+    """Leave one sequence out: for each held-out sequence the grid value with the best mean F1
+    on the others, and its F1 on the held-out one (printed as ``label``)."""
+    folds = {}
+    for held in seqs:
+        train = [s for s in seqs if s != held]
+        best = max(grid, key=lambda v: np.mean([f1[v][s] for s in train]))
+        folds[held] = {"chosen": best, "held_out_f1": f1[best][held]}
+    print(f"{label}: " + ", ".join(f"{h}: {d['chosen']} ({d['held_out_f1']:.3f})"
+                                    for h, d in folds.items()), flush=True)
+    return {"grid": {str(v): f1[v] for v in grid}, "folds": folds}
+
+
 def leave_one_out(args: argparse.Namespace, work: Path) -> dict[str, Any]:
     """Each constant of :data:`LOO_GRID` chosen with one sequence held out (module doc)."""
     seqs: dict[str, Any] = {clip: (read_frames(VEHICLES / clip / "img1"), Truth(VEHICLES / clip))
@@ -506,14 +520,7 @@ def leave_one_out(args: argparse.Namespace, work: Path) -> dict[str, Any]:
                     f1[value][seq] = truth.score(got["frontend"], 0.5)["f1"]
             print(f"loo {name}={value}: " + " ".join(f"{s} {v:.3f}" for s, v in
                                                    f1[value].items()), flush=True)
-        folds = {}
-        for held in seqs:
-            train = [s for s in seqs if s != held]
-            best = max(grid, key=lambda v: np.mean([f1[v][s] for s in train]))
-            folds[held] = {"chosen": best, "held_out_f1": f1[best][held]}
-        out[name] = {"grid": {str(v): f1[v] for v in grid}, "folds": folds}
-        print(f"loo {name}: " + ", ".join(f"{h}: {d['chosen']} ({d['held_out_f1']:.3f})"
-                                           for h, d in folds.items()), flush=True)
+        out[name] = _folds(f"loo {name}", grid, f1, list(seqs))
     return out
 
 
@@ -542,14 +549,7 @@ def leave_one_out_e2e(args: argparse.Namespace, work: Path) -> dict[str, Any]:
                     f1[value][seq] = truth.score(got["results"], 0.5)["f1"]
             print(f"loo-e2e {name}={value}: " + " ".join(f"{s} {v:.3f}" for s, v in
                                                        f1[value].items()), flush=True)
-        folds = {}
-        for held in seqs:
-            train = [s for s in seqs if s != held]
-            best = max(grid, key=lambda v: np.mean([f1[v][s] for s in train]))
-            folds[held] = {"chosen": best, "held_out_f1": f1[best][held]}
-        out[name] = {"grid": {str(v): f1[v] for v in grid}, "folds": folds}
-        print(f"loo-e2e {name}: " + ", ".join(f"{h}: {d['chosen']} ({d['held_out_f1']:.3f})"
-                                               for h, d in folds.items()), flush=True)
+        out[name] = _folds(f"loo-e2e {name}", grid, f1, list(seqs))
     return out
 
 

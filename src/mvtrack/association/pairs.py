@@ -81,12 +81,7 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
     reach and tests each track against the cells its reach covers.
     """
     n, m = cx.shape[0], dxy.shape[0]
-    tr = np.flatnonzero(tsel)
-    dr = np.flatnonzero(dsel)
-    cap = 16 + 4 * (tr.size + dr.size)
-    ti = np.empty(cap, np.intp)
-    dj = np.empty(cap, np.intp)
-    cost = np.empty(cap, np.float64)
+    tr, dr, ti, dj, cost = _buffers(tsel, dsel)
     k = 0
     if tr.size == 0 or dr.size == 0 or n == 0 or m == 0:
         return ti[:0], dj[:0], cost[:0]
@@ -98,10 +93,7 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                     continue
                 c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    if k == cap:
-                        cap *= 2
-                        ti, dj, cost = _grow(ti, dj, cost, cap)
-                    ti[k], dj[k], cost[k] = i, j, c
+                    ti, dj, cost = _push(ti, dj, cost, k, i, j, c)
                     k += 1
         return ti[:k], dj[:k], cost[:k]
     # the detections binned into square cells of the median reach (CSR: the members of cell
@@ -148,10 +140,7 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                     continue
                 c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    if k == cap:
-                        cap *= 2
-                        ti, dj, cost = _grow(ti, dj, cost, cap)
-                    ti[k], dj[k], cost[k] = i, j, c
+                    ti, dj, cost = _push(ti, dj, cost, k, i, j, c)
                     # keep this track's pairs in detection order (insertion, a few at most)
                     e = k
                     while e > first and dj[e - 1] > dj[e]:
@@ -163,12 +152,26 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
 
 
 @kernel
-def _grow(ti: IntArray, dj: IntArray, cost: FloatArray, cap: int
+def _buffers(tsel: NDArray[np.bool_], dsel: NDArray[np.bool_]
+             ) -> tuple[IntArray, IntArray, IntArray, IntArray, FloatArray]:
+    """The selected track and detection rows, and empty pair buffers sized for them."""
+    tr = np.flatnonzero(tsel)
+    dr = np.flatnonzero(dsel)
+    cap = 16 + 4 * (tr.size + dr.size)
+    return tr, dr, np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap, np.float64)
+
+
+@kernel
+def _push(ti: IntArray, dj: IntArray, cost: FloatArray, k: int, i: int, j: int, c: float
           ) -> tuple[IntArray, IntArray, FloatArray]:
-    t2, d2, c2 = np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap, np.float64)
-    k = ti.size
-    t2[:k], d2[:k], c2[:k] = ti, dj, cost
-    return t2, d2, c2
+    """Write the pair ``(i, j, c)`` at position ``k``, doubling the buffers when full."""
+    if k == ti.size:
+        t2, d2 = np.empty(2 * k, np.intp), np.empty(2 * k, np.intp)
+        c2 = np.empty(2 * k, np.float64)
+        t2[:k], d2[:k], c2[:k] = ti, dj, cost
+        ti, dj, cost = t2, d2, c2
+    ti[k], dj[k], cost[k] = i, j, c
+    return ti, dj, cost
 
 
 @kernel
@@ -238,12 +241,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
     pair may pass), is tested pair by pair.
     """
     n, m = cx.shape[0], dxy.shape[0]
-    tr = np.flatnonzero(tsel)
-    dr = np.flatnonzero(dsel)
-    cap = 16 + 4 * (tr.size + dr.size)
-    ti = np.empty(cap, np.intp)
-    dj = np.empty(cap, np.intp)
-    cost = np.empty(cap, np.float64)
+    tr, dr, ti, dj, cost = _buffers(tsel, dsel)
     k = 0
     if tr.size == 0 or dr.size == 0 or n == 0 or m == 0:
         return ti[:0], dj[:0], cost[:0]
@@ -252,10 +250,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
             for j in dr:
                 c = _overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    if k == cap:
-                        cap *= 2
-                        ti, dj, cost = _grow(ti, dj, cost, cap)
-                    ti[k], dj[k], cost[k] = i, j, c
+                    ti, dj, cost = _push(ti, dj, cost, k, i, j, c)
                     k += 1
         return ti[:k], dj[:k], cost[:k]
     # the detections' boxes (a box with a coordinate that is not finite overlaps nothing:
@@ -338,10 +333,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
             j = cand[e]
             c = _overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
             if c <= gate:
-                if k == cap:
-                    cap *= 2
-                    ti, dj, cost = _grow(ti, dj, cost, cap)
-                ti[k], dj[k], cost[k] = i, j, c
+                ti, dj, cost = _push(ti, dj, cost, k, i, j, c)
                 k += 1
     return ti[:k], dj[:k], cost[:k]
 

@@ -207,24 +207,12 @@ def _presets() -> tuple[str, ...]:
 
 
 def _check_parts(settings: RunSettings, config: Path | None) -> None:
-    """Build the detector and the template bank of ``settings`` once (at the papers' image
-    size), so a bad parameter of the file stops the command before any work."""
+    """Build the detector, tracker and template bank of ``settings`` once (at the papers'
+    image size), so a bad parameter of the file stops the command before any work."""
     from mvtrack.errors import InputError
-    from mvtrack.video import (
-        REFERENCE_SIZE,
-        build_detector,
-        build_rescuer,
-        build_tracker,
-        resolve_settings,
-    )
+    from mvtrack.video import check_settings
 
-    resolved = resolve_settings(settings, REFERENCE_SIZE)
     try:
-        build_detector(resolved)
+        check_settings(settings, settings.frame_rate or 30.0)
     except (TypeError, ValueError) as exc:
         raise InputError(f"{config}: {exc}") from None
-    if settings.templates and settings.template_params:
-        try:
-            build_rescuer(resolved, build_tracker(resolved, settings.frame_rate or 30.0))
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"{config}: {exc}") from None

@@ -12,7 +12,13 @@ Nothing below this package imports it: the tracker and the detection front ends 
 of each other; the video glue connects them.
 """
 
-from mvtrack.video.build import build_detector, build_rescuer, build_tracker, build_tracker_config
+from mvtrack.video.build import (
+    build_detector,
+    build_rescuer,
+    build_tracker,
+    build_tracker_config,
+    check_settings,
+)
 from mvtrack.video.loop import HeldScores, PipelineResult, progress_bar, run_frames
 from mvtrack.video.rescue import StoppedVehicleRescuer, TemplateRescuer
 from mvtrack.video.run import RunOutput, track_to_folder, track_video, write_tables
@@ -29,6 +35,7 @@ __all__ = [
     "build_rescuer",
     "build_tracker",
     "build_tracker_config",
+    "check_settings",
     "progress_bar",
     "resolve_settings",
     "run_frames",

@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from mvtrack.config import RunSettings
+from mvtrack.video.build import check_settings
 from mvtrack.video.jobs import (
     STATUSES,
     BatchItem,
@@ -54,29 +55,6 @@ from mvtrack.video.jobs import (
 SUMMARY_NAME = "batch.json"
 
 _QUIET_LOGGERS = ("distributed", "tornado", "bokeh", "asyncio")
-
-
-def check_settings(settings: RunSettings) -> None:
-    """Build the detector and tracker once, so bad settings fail before any worker starts.
-
-    Raises
-    ------
-    ValueError
-        Unknown preset, predictor, distance, assignment rule, detector or parameter.
-    """
-    from mvtrack.video import (
-        REFERENCE_SIZE,
-        build_detector,
-        build_rescuer,
-        build_tracker,
-        resolve_settings,
-    )
-
-    resolved = resolve_settings(settings, REFERENCE_SIZE)
-    build_detector(resolved)
-    tracker = build_tracker(resolved, 30.0)
-    if resolved.templates:
-        build_rescuer(resolved, tracker)
 
 
 @contextlib.contextmanager

@@ -121,3 +121,22 @@ def build_rescuer(settings: RunSettings, tracker: Any, detector: Any = None) -> 
     # matches farther than max_shift are refused: the NCC need not look beyond it
     guard.inner = TemplateRescuer(bank, tracker, detector=detector, max_radius=guard.max_shift)
     return guard
+
+
+def check_settings(settings: RunSettings, fps: float = 30.0) -> None:
+    """Build the detector, the tracker and (with templates) the template bank of ``settings``
+    once at the papers' image size, so bad settings fail before any frame is read or any
+    worker starts.
+
+    Raises
+    ------
+    ValueError
+        Unknown preset, predictor, distance, assignment rule, detector or parameter.
+    """
+    from mvtrack.video.settings import REFERENCE_SIZE, resolve_settings
+
+    resolved = resolve_settings(settings, REFERENCE_SIZE)
+    build_detector(resolved)
+    tracker = build_tracker(resolved, fps)
+    if resolved.templates:
+        build_rescuer(resolved, tracker)
