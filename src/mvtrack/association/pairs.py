@@ -81,7 +81,12 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
     reach and tests each track against the cells its reach covers.
     """
     n, m = cx.shape[0], dxy.shape[0]
-    tr, dr, ti, dj, cost = _buffers(tsel, dsel)
+    tr = np.flatnonzero(tsel)
+    dr = np.flatnonzero(dsel)
+    cap = 16 + 4 * (tr.size + dr.size)
+    ti = np.empty(cap, np.intp)
+    dj = np.empty(cap, np.intp)
+    cost = np.empty(cap, np.float64)
     k = 0
     if tr.size == 0 or dr.size == 0 or n == 0 or m == 0:
         return ti[:0], dj[:0], cost[:0]
@@ -93,7 +98,10 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                     continue
                 c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    ti, dj, cost = _push(ti, dj, cost, k, i, j, c)
+                    if k == cap:
+                        cap *= 2
+                        ti, dj, cost = _grow(ti, dj, cost, cap)
+                    ti[k], dj[k], cost[k] = i, j, c
                     k += 1
         return ti[:k], dj[:k], cost[:k]
     # the detections binned into square cells of the median reach (CSR: the members of cell
@@ -140,7 +148,10 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                     continue
                 c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    ti, dj, cost = _push(ti, dj, cost, k, i, j, c)
+                    if k == cap:
+                        cap *= 2
+                        ti, dj, cost = _grow(ti, dj, cost, cap)
+                    ti[k], dj[k], cost[k] = i, j, c
                     # keep this track's pairs in detection order (insertion, a few at most)
                     e = k
                     while e > first and dj[e - 1] > dj[e]:
@@ -152,26 +163,12 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
 
 
 @kernel
-def _buffers(tsel: NDArray[np.bool_], dsel: NDArray[np.bool_]
-             ) -> tuple[IntArray, IntArray, IntArray, IntArray, FloatArray]:
-    """The selected track and detection rows, and empty pair buffers sized for them."""
-    tr = np.flatnonzero(tsel)
-    dr = np.flatnonzero(dsel)
-    cap = 16 + 4 * (tr.size + dr.size)
-    return tr, dr, np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap, np.float64)
-
-
-@kernel
-def _push(ti: IntArray, dj: IntArray, cost: FloatArray, k: int, i: int, j: int, c: float
+def _grow(ti: IntArray, dj: IntArray, cost: FloatArray, cap: int
           ) -> tuple[IntArray, IntArray, FloatArray]:
-    """Write the pair ``(i, j, c)`` at position ``k``, doubling the buffers when full."""
-    if k == ti.size:
-        t2, d2 = np.empty(2 * k, np.intp), np.empty(2 * k, np.intp)
-        c2 = np.empty(2 * k, np.float64)
-        t2[:k], d2[:k], c2[:k] = ti, dj, cost
-        ti, dj, cost = t2, d2, c2
-    ti[k], dj[k], cost[k] = i, j, c
-    return ti, dj, cost
+    t2, d2, c2 = np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap, np.float64)
+    k = ti.size
+    t2[:k], d2[:k], c2[:k] = ti, dj, cost
+    return t2, d2, c2
 
 
 @kernel
@@ -241,7 +238,12 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
     pair may pass), is tested pair by pair.
     """
     n, m = cx.shape[0], dxy.shape[0]
-    tr, dr, ti, dj, cost = _buffers(tsel, dsel)
+    tr = np.flatnonzero(tsel)
+    dr = np.flatnonzero(dsel)
+    cap = 16 + 4 * (tr.size + dr.size)
+    ti = np.empty(cap, np.intp)
+    dj = np.empty(cap, np.intp)
+    cost = np.empty(cap, np.float64)
     k = 0
     if tr.size == 0 or dr.size == 0 or n == 0 or m == 0:
         return ti[:0], dj[:0], cost[:0]
@@ -250,7 +252,10 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
             for j in dr:
                 c = _overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    ti, dj, cost = _push(ti, dj, cost, k, i, j, c)
+                    if k == cap:
+                        cap *= 2
+                        ti, dj, cost = _grow(ti, dj, cost, cap)
+                    ti[k], dj[k], cost[k] = i, j, c
                     k += 1
         return ti[:k], dj[:k], cost[:k]
     # the detections' boxes (a box with a coordinate that is not finite overlaps nothing:
@@ -333,7 +338,10 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
             j = cand[e]
             c = _overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
             if c <= gate:
-                ti, dj, cost = _push(ti, dj, cost, k, i, j, c)
+                if k == cap:
+                    cap *= 2
+                    ti, dj, cost = _grow(ti, dj, cost, cap)
+                ti[k], dj[k], cost[k] = i, j, c
                 k += 1
     return ti[:k], dj[:k], cost[:k]
 
