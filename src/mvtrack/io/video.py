@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.errors import InputError
+from mvtrack.io.images import read_image
 
 Frame = NDArray[np.uint8]
 
@@ -221,7 +222,7 @@ class FolderSource(FrameSource):
             raise InputError(
                 f"image folder {folder} contains no image files ({', '.join(IMAGE_EXTENSIONS)})"
             )
-        first = cv2.imread(str(self._files[0]), cv2.IMREAD_COLOR)
+        first = read_image(self._files[0])
         if first is None:
             raise InputError(f"cannot read image {self._files[0]} (not an image or corrupt)")
         self._first: Frame | None = first
@@ -238,7 +239,7 @@ class FolderSource(FrameSource):
         if first is not None:
             yield first
         for path in self._files[1:]:
-            frame = cv2.imread(str(path), cv2.IMREAD_COLOR)
+            frame = read_image(path)
             if frame is None:
                 self._fail(f"cannot read image {path.name}")
                 return
