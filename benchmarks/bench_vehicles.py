@@ -30,8 +30,9 @@ needs NumPy < 2: ``--peers-python``, ``$MVTRACK_PEERS_PYTHON``).
 OpenCV thread, one decoder thread; the machine is shared, CPU time is what one dedicated core
 takes). mvtrack: the frame loop of ``mvtrack track --no-video`` (decode, front end, tracker,
 template rescuer, relinking, the track log; the files written at the end are not timed).
-Stock: decode + MOG2 + blobs in this process, plus SORT's update calls in the peers'
-interpreter over the same detections. The two alternate, R rounds per sequence; the table
+Stock: decode (``cv2.imread``, ``cv2.VideoCapture``) + MOG2 + blobs in this process, plus
+SORT's update calls in the peers' interpreter over the same detections; its ratio with the
+frames decoded by mvtrack's reader (the same pixels) is given beside. The two alternate, R rounds per sequence; the table
 gives the median of each and the median of the rounds' ratios.
 
 Usage::
@@ -372,13 +373,37 @@ def mvtrack_cpu(path: Path, fps: float, detector: str | None = None) -> tuple[fl
     return time.process_time() - t0, res.n_frames
 
 
-def stock_cpu(path: Path, fps: float, python: str, work: Path) -> tuple[float, int]:
-    """CPU seconds of decode + MOG2 + blobs here, plus SORT's update calls there."""
+def opencv_frames(path: Path) -> Any:
+    """The frames as stock OpenCV reads them: ``cv2.imread`` of a folder's sorted files, or
+    ``cv2.VideoCapture`` with one decoder thread."""
+    import cv2
+
+    if path.is_dir():
+        for f in sorted(p for p in path.iterdir() if p.suffix.lower() in (".jpg", ".png")):
+            yield cv2.imread(str(f), cv2.IMREAD_COLOR)
+        return
+    cap = cv2.VideoCapture(str(path), cv2.CAP_ANY, [cv2.CAP_PROP_N_THREADS, 1])
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        yield frame
+    cap.release()
+
+
+def stock_cpu(path: Path, fps: float, python: str, work: Path,
+              stock_decode: bool = True) -> tuple[float, int]:
+    """CPU seconds of decode + MOG2 + blobs here, plus SORT's update calls there. The frames
+    are decoded by OpenCV as a stock pipeline does (``stock_decode``), or by mvtrack's reader
+    (:func:`mvtrack.io.video.open_source`, the same pixels)."""
     from mvtrack.io.video import open_source
 
     t0 = time.process_time()
-    with open_source(str(path), fps=fps, threads=1) as src:
-        boxes = stock_frontend(f for _, f in src)
+    if stock_decode:
+        boxes = stock_frontend(opencv_frames(path))
+    else:
+        with open_source(str(path), fps=fps, threads=1) as src:
+            boxes = stock_frontend(f for _, f in src)
     front = time.process_time() - t0
     _, sort = run_sort(python, boxes, work)
     return front + sort, len(boxes)
@@ -421,19 +446,24 @@ def speed(args: argparse.Namespace, work: Path) -> dict[str, Any]:
         seqs["vtest.avi"] = (VTEST, 10.0)
     out: dict[str, Any] = {}
     for name, (path, fps) in seqs.items():
-        ours, stock, ratio = [], [], []
+        ours, stock, ratio, same = [], [], [], []
         mvtrack_cpu(path, fps)  # warm-up: imports, numba's cache
         for _ in range(args.speed_rounds):
             a, n = mvtrack_cpu(path, fps)
             b, m = stock_cpu(path, fps, python, work)
+            c, _ = stock_cpu(path, fps, python, work, stock_decode=False)
             ours.append(n / a)
             stock.append(m / b)
             ratio.append((n / a) / (m / b))
+            same.append((n / a) / (m / c))
         out[name] = {"frames": n, "mvtrack_fps": statistics.median(ours),
                      "stock_fps": statistics.median(stock), "ratio": statistics.median(ratio),
+                     "ratio_same_reader": statistics.median(same),
                      "rounds": {"mvtrack": ours, "stock": stock}}
         print(f"speed {name}: mvtrack {out[name]['mvtrack_fps']:.1f} fps, stock "
-              f"{out[name]['stock_fps']:.1f} fps, ratio {out[name]['ratio']:.2f}", flush=True)
+              f"{out[name]['stock_fps']:.1f} fps, ratio {out[name]['ratio']:.2f} (stock "
+              f"decoding with mvtrack's reader: {out[name]['ratio_same_reader']:.2f})",
+              flush=True)
     return out
 
 
