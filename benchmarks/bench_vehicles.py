@@ -32,8 +32,8 @@ takes). mvtrack: the frame loop of ``mvtrack track --no-video`` (decode, front e
 template rescuer, relinking, the track log; the files written at the end are not timed).
 Stock: decode (``cv2.imread``, ``cv2.VideoCapture``) + MOG2 + blobs in this process, plus
 SORT's update calls in the peers' interpreter over the same detections; its ratio with the
-frames decoded by mvtrack's reader (the same pixels) is given beside. The two alternate, R rounds per sequence; the table
-gives the median of each and the median of the rounds' ratios.
+frames decoded by mvtrack's reader (the same pixels) is given beside. The two alternate, R
+rounds per sequence; the table gives the median of each and the median of the rounds' ratios.
 
 Usage::
 
