@@ -378,8 +378,11 @@ def opencv_frames(path: Path) -> Any:
     ``cv2.VideoCapture`` with one decoder thread."""
     import cv2
 
+    from mvtrack.io.video import IMAGE_EXTENSIONS
+
     if path.is_dir():
-        for f in sorted(p for p in path.iterdir() if p.suffix.lower() in (".jpg", ".png")):
+        for f in sorted((p for p in path.iterdir() if p.suffix.lower() in IMAGE_EXTENSIONS),
+                        key=lambda p: p.name):
             yield cv2.imread(str(f), cv2.IMREAD_COLOR)
         return
     cap = cv2.VideoCapture(str(path), cv2.CAP_ANY, [cv2.CAP_PROP_N_THREADS, 1])
