@@ -45,6 +45,7 @@ KERNEL_MODULES = (
     "association/assign.py",
     "tracking/lifecycle.py",
     "tracking/step.py",
+    "detection/colourbg.py",
 )
 
 __all__ = ["COMPILED", "KERNEL_MODULES", "cache_dir", "kernel", "python_call"]

@@ -48,7 +48,7 @@ ratio, plus ``shadow_texture``: a dark grey car on a grey road keeps the road's 
 brings its own edges), or the background's texture is kept under a change of colour (a
 shadow lit by the blue sky: the 3×3 correlation of frame and background above
 ``shadow_correlation`` on a background with texture). The test runs on the candidates only
-(sparse gathers), not on the whole frame.
+(one compiled pass over them, :func:`shadow_cells`), not on the whole frame.
 
 Cost: the mean, its neighbourhood extremes and the threshold map of eq. (2) are refreshed every
 ``refresh`` frames (they change at the rate α), and so are the noise and the count of frames a
@@ -64,6 +64,8 @@ import math
 import cv2
 import numpy as np
 from numpy.typing import NDArray
+
+from mvtrack.jit import kernel
 
 Image = NDArray[np.uint8]
 
@@ -314,60 +316,18 @@ class ColourBackground:
                 self._stale = True
 
     def _remove_shadows(self, img: Image, fg: Image, cand: Image) -> None:
-        """Shadow pixels of ``fg`` set to 0 (the test of the module docstring, on the
-        candidates ``cand`` only: the ratio first, then the colour or the texture).
-        Integer arithmetic on the gathered pixels; the windows are read from padded grey
-        images by flat index, without bounds checks."""
-        grid = cand[:: self.shadow_step, :: self.shadow_step]
-        pts = cv2.findNonZero(grid)
+        """Shadow pixels of ``fg`` set to 0: the test of the module docstring on the
+        candidates ``cand`` only, one compiled pass over them (:func:`shadow_cells`)."""
+        step = self.shadow_step
+        pts = cv2.findNonZero(cand[::step, ::step])  # the tested candidates, (x, y) / step
         if pts is None:
             return
-        w = fg.shape[1]
-        pts = pts.reshape(-1, 2) * self.shadow_step
-        idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
-        f = img.reshape(-1, 3)[idx].astype(np.int64) + 1
-        m = self._mu8.reshape(-1, 3)[idx].astype(np.int64) + 1
-        lf, lm = f[:, 0] + f[:, 1] + f[:, 2], m[:, 0] + m[:, 1] + m[:, 2]  # (no short-axis sums)
-        lo, hi = self.shadow_ratio
-        sel = (lf >= lo * lm) & (lf <= hi * lm)
-        if not sel.any():
-            return
-        idx, f, m, lf, lm = idx[sel], f[sel], m[sel], lf[sel], lm[sel]
-        # the colour kept: Σ_c |f_c / L_f − m_c / L_m| < τ, multiplied out by L_f L_m
-        cross = np.abs(f * lm[:, None] - m * lf[:, None])
-        cross = cross[:, 0] + cross[:, 1] + cross[:, 2]
-        shadow = cross < self.shadow_chroma * (lf * lm).astype(np.float64)
         grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                                   cv2.BORDER_REPLICATE)
-        pidx = idx + (idx // w) * 2 + (w + 2) + 1  # the same pixels in the padded images
-        if shadow.any():  # ... and no texture of its own (a flat surface in the shade)
-            at = pidx[shadow]
-            s_f, _, _ = _window_stats(grey, None, at, w + 2)
-            ratio = lf[shadow] / lm[shadow]
-            flat = s_f <= ratio * self._mu_spread.reshape(-1)[idx[shadow]] + (
-                self.shadow_texture)
-            shadow[np.flatnonzero(shadow)[~flat]] = False
-        # ... or the background's texture kept under a change of colour (a shadow lit by the
-        # blue sky): the frame correlates with a textured background (3×3)
-        rest = np.flatnonzero(~shadow)
-        rest = rest[self._mu_spread.reshape(-1)[idx[rest]] > self.shadow_min_texture]
-        if rest.size:
-            _, _, rho = _window_stats(grey, self._mu_grey_pad, pidx[rest], w + 2)
-            shadow[rest] = rho > self.shadow_correlation
-        if self.shadow_step == 1:
-            fg.reshape(-1)[idx[shadow]] = 0
-            return
-        # each tested pixel speaks for its cell of the grid (its own pixel is the cell's top
-        # left): the cells of the shadow pixels are cleared where they were candidates
-        step = self.shadow_step
-        at = idx[shadow]
-        y, x = np.divmod(at, w)
-        dy, dx = np.divmod(np.arange(step * step), step)
-        yy, xx = y[:, None] + dy, x[:, None] + dx
-        inside = (yy < fg.shape[0]) & (xx < w)
-        cell = yy[inside] * w + xx[inside]
-        cell = cell[cand.reshape(-1)[cell] != 0]
-        fg.reshape(-1)[cell] = 0
+        lo, hi = self.shadow_ratio
+        shadow_cells(img, self._mu8, grey, self._mu_grey_pad, self._mu_spread, fg, cand,
+                     pts.reshape(-1, 2), step, lo, hi, self.shadow_chroma,
+                     self.shadow_texture, self.shadow_min_texture, self.shadow_correlation)
 
     def _remove_ghosts(self, img: Image, fg: Image) -> None:
         """Ghost blobs of ``fg`` reset to the frame and cleared: the test of
@@ -459,33 +419,87 @@ def _edges(grey: Image) -> NDArray[np.float32]:
     return cv2.magnitude(gx, gy)
 
 
-def _window_stats(a: Image, b: Image | None, at: NDArray[np.intp], stride: int
-                  ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]]:
-    """Over the 3×3 window of the pixels at flat indices ``at`` of images padded by one pixel
-    (row length ``stride``), gathered at those pixels only: the standard deviations of ``a``
-    and ``b`` and their correlation (``b`` None: zeros for the last two)."""
-    fa = a.reshape(-1)
-    fb = None if b is None else b.reshape(-1)
-    n = at.size
-    sa, saa = np.zeros(n, np.float32), np.zeros(n, np.float32)
-    sb, sbb, sab = (np.zeros(n, np.float32) for _ in range(3))
-    for off in (-stride - 1, -stride, -stride + 1, -1, 0, 1, stride - 1, stride, stride + 1):
-        va = fa[at + off].astype(np.float32)  # the nine offsets, not the pixels
-        sa += va
-        saa += va * va
-        if fb is not None:
-            vb = fb[at + off].astype(np.float32)
-            sb += vb
-            sbb += vb * vb
-            sab += va * vb
-    ma = sa / 9.0
-    va = np.maximum(saa / 9.0 - ma * ma, 0.0)
-    if fb is None:
-        return np.sqrt(va), sb, sb
-    mb = sb / 9.0
-    vb = np.maximum(sbb / 9.0 - mb * mb, 0.0)
-    cov = sab / 9.0 - ma * mb
-    return np.sqrt(va), np.sqrt(vb), cov / np.sqrt(va * vb + 1e-3)
+@kernel
+def shadow_cells(
+    img: Image, mu8: Image, grey_pad: Image, mu_grey_pad: Image,
+    mu_spread: NDArray[np.float32], fg: Image, cand: Image, pts: NDArray[np.int32], step: int,
+    lo: float, hi: float, chroma: float, texture: float, min_texture: float,
+    correlation: float,
+) -> None:
+    r"""Clear the shadow cells of ``fg`` (in place): the shadow test of the module docstring
+    on the candidates ``pts`` (``(x, y)`` in units of ``step`` px: every ``step``-th
+    candidate of ``cand`` along each row and column).
+
+    For a candidate with frame colour :math:`f` and background colour :math:`m` (grey levels
+    plus one, so that black has a colour) and brightnesses :math:`L_f = \sum_c f_c`,
+    :math:`L_m = \sum_c m_c`:
+
+    - the brightness ratio must lie in ``[lo, hi]``: :math:`lo \, L_m \le L_f \le hi \, L_m`;
+    - *colour kept*: :math:`\sum_c |f_c / L_f - m_c / L_m| <` ``chroma``, multiplied out by
+      :math:`L_f L_m` (integers), and no texture of its own: the standard deviation
+      :math:`s_f` of the frame's grey levels over the 3×3 window at most
+      :math:`(L_f / L_m)\, s_m +` ``texture`` (:math:`s_m`: ``mu_spread``, the background's);
+    - or *texture kept*: on a background with :math:`s_m >` ``min_texture``, the correlation
+      of the frame's and the background's grey levels over the window above ``correlation``.
+
+    A tested pixel that is a shadow clears the candidates of its ``step`` × ``step`` cell
+    (itself at the top left). The window statistics are summed in ``float32`` in row order,
+    as NumPy sums the nine offsets; ``grey_pad`` and ``mu_grey_pad`` are the frame's and the
+    background's grey levels padded by one pixel (replicated border).
+    """
+    h, w = fg.shape
+    ninth = np.float32(9.0)
+    zero = np.float32(0.0)
+    tiny = np.float32(1e-3)
+    min_texture32 = np.float32(min_texture)
+    correlation32 = np.float32(correlation)
+    for k in range(pts.shape[0]):
+        x, y = pts[k, 0] * step, pts[k, 1] * step
+        f0, f1, f2 = np.int64(img[y, x, 0]) + 1, np.int64(img[y, x, 1]) + 1, np.int64(
+            img[y, x, 2]) + 1
+        m0, m1, m2 = np.int64(mu8[y, x, 0]) + 1, np.int64(mu8[y, x, 1]) + 1, np.int64(
+            mu8[y, x, 2]) + 1
+        lf, lm = f0 + f1 + f2, m0 + m1 + m2
+        if not (lf >= lo * lm and lf <= hi * lm):  # the brightness ratio
+            continue
+        cross = abs(f0 * lm - m0 * lf) + abs(f1 * lm - m1 * lf) + abs(f2 * lm - m2 * lf)
+        shadow = cross < chroma * np.float64(lf * lm)  # the colour kept
+        spread = mu_spread[y, x]
+        if shadow:  # ... and no texture of its own
+            sa, saa = zero, zero
+            for dy in range(3):
+                for dx in range(3):
+                    va = np.float32(grey_pad[y + dy, x + dx])
+                    sa += va
+                    saa += va * va
+            ma = sa / ninth
+            var = saa / ninth - ma * ma
+            s_f = np.float32(math.sqrt(var if var > zero else zero))
+            shadow = np.float64(s_f) <= (lf / lm) * np.float64(spread) + texture
+        if not shadow and spread > min_texture32:  # the background's texture kept
+            sa, saa, sb, sbb, sab = zero, zero, zero, zero, zero
+            for dy in range(3):
+                for dx in range(3):
+                    va = np.float32(grey_pad[y + dy, x + dx])
+                    vb = np.float32(mu_grey_pad[y + dy, x + dx])
+                    sa += va
+                    saa += va * va
+                    sb += vb
+                    sbb += vb * vb
+                    sab += va * vb
+            ma, mb = sa / ninth, sb / ninth
+            var_a = saa / ninth - ma * ma
+            var_b = sbb / ninth - mb * mb
+            var_a = var_a if var_a > zero else zero
+            var_b = var_b if var_b > zero else zero
+            cov = sab / ninth - ma * mb
+            rho = cov / np.float32(math.sqrt(var_a * var_b + tiny))
+            shadow = rho > correlation32
+        if shadow:  # the cell of the tested pixel, where it holds candidates
+            for yy in range(y, min(y + step, h)):
+                for xx in range(x, min(x + step, w)):
+                    if cand[yy, xx] != 0:
+                        fg[yy, xx] = 0
 
 
 def _bgr(frame: Image) -> Image:
