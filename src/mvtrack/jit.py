@@ -46,6 +46,7 @@ KERNEL_MODULES = (
     "tracking/lifecycle.py",
     "tracking/step.py",
     "detection/colourbg.py",
+    "detection/wings.py",
 )
 
 __all__ = ["COMPILED", "KERNEL_MODULES", "cache_dir", "kernel", "python_call"]

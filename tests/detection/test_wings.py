@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack.detection.wings import cut_flat_wings
+from mvtrack.detection.wings import cut_flat_wings, wing_parts
 
 
 def label(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -95,6 +95,16 @@ def test_equals_the_per_blob_loop_on_random_masks(seed: int) -> None:
         got = sorted(map(tuple, np.column_stack([boxes, area]).tolist()))
         np.testing.assert_allclose(np.array(got), np.array(oracle(m, tau)))
         assert len(src) == len(boxes)
+        # blob by blob in the order asked, left to right within a blob; each part inside its
+        # blob's box
+        order = np.lexsort((boxes[:, 0], src))
+        np.testing.assert_array_equal(order, np.arange(len(src)))
+        s = stats[ids[src]]
+        assert (boxes[:, 0] >= s[:, 0] - 0.5).all() and (boxes[:, 2] <= s[:, 2]).all()
+        # the plain function the kernel is compiled from gives the same
+        for a, b in zip(wing_parts.py_func(labels, ids.astype(np.intp), stats, tau),
+                        (boxes, src, area), strict=True):
+            np.testing.assert_array_equal(a, b)
 
 
 def test_only_the_blobs_asked_for() -> None:

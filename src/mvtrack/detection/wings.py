@@ -20,15 +20,16 @@ gaps between legs do not make a column low: its top is the object's top. Nothing
 about a kind of object: a car seen from above or from the side has columns of nearly equal
 height, and keeps its box.
 
-All blobs at once: the foreground pixels are grouped by (blob, column) of the blobs' boxes
-(no sort: each group's place is known from the blob's box), the heights, parts and boxes follow
-from reductions over the groups (no loop over blobs).
+All blobs in one compiled pass (:func:`wing_parts`): each blob's box is scanned once for the
+top, bottom and pixel count of its columns, and its parts follow from them.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+
+from mvtrack.jit import kernel
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -69,46 +70,72 @@ def cut_flat_wings(
         s = st[ids].astype(np.float64)
         boxes = np.column_stack([s[:, 0] - 0.5, s[:, 1] - 0.5, s[:, 2], s[:, 3]])
         return boxes, np.arange(ids.size), s[:, 4]
-    h, w = labels.shape
-    index = np.full(len(st), -1, np.intp)  # label -> index into ids
-    index[ids] = np.arange(ids.size)
-    r0 = int(st[ids, 1].min())  # the rows of the blobs asked for
-    band = labels[r0 : int((st[ids, 1] + st[ids, 3]).max())].reshape(-1)
-    pix = np.flatnonzero(band != 0)  # row by row (a boolean image is scanned fastest)
-    blob = index[band[pix]]
-    inside = blob >= 0
-    pix, blob = pix[inside], blob[inside]
-    row, col = np.divmod(pix, w)
-    row += r0
-    # one group per (blob, column) of the blob's box, blob by blob, columns left to right;
-    # a blob's columns are contiguous (it is connected), an empty one is dropped anyway
-    left, width = st[ids, 0].astype(np.intp), st[ids, 2].astype(np.intp)
-    offset = np.cumsum(width) - width
-    key = offset[blob] + col - left[blob]
-    n_groups = int(width.sum())
-    count = np.bincount(key, minlength=n_groups)
-    top = np.full(n_groups, h, np.intp)
-    np.minimum.at(top, key, row)
-    bottom = np.zeros(n_groups, np.intp)
-    np.maximum.at(bottom, key, row)
-    present = np.flatnonzero(count)
-    gblob = np.repeat(np.arange(ids.size), width)[present]
-    gcol = (np.arange(n_groups) - np.repeat(offset - left, width))[present]
-    top, bottom = top[present], bottom[present]
-    count = count[present].astype(np.float64)
-    base = st[ids, 1] + st[ids, 3] - 1  # each blob's lowest row
-    height = base[gblob] - top + 1  # h(c)
-    bstart = np.flatnonzero(np.r_[True, gblob[1:] != gblob[:-1]])
-    tallest = np.maximum.reduceat(height, bstart)
-    tall = height >= tau * np.repeat(tallest, np.diff(np.r_[bstart, gblob.size]))
-    # parts: runs of tall columns within a blob (a blob's columns are contiguous)
-    g = np.flatnonzero(tall)
-    new = np.r_[True, (gblob[g][1:] != gblob[g][:-1]) | (np.diff(g) > 1)]
-    start = np.flatnonzero(new)
-    x0 = gcol[g][start]
-    x1 = np.maximum.reduceat(gcol[g], start)
-    y0 = np.minimum.reduceat(top[g], start)
-    y1 = np.maximum.reduceat(bottom[g], start)
-    area = np.add.reduceat(count[g], start)
-    boxes = np.column_stack([x0 - 0.5, y0 - 0.5, x1 - x0 + 1, y1 - y0 + 1]).astype(np.float64)
-    return boxes, gblob[g][start].astype(np.intp), area
+    boxes, source, area = wing_parts(labels, ids, st, float(tau))
+    return boxes, source, area
+
+
+@kernel
+def wing_parts(
+    labels: NDArray[np.integer], ids: IntArray, stats: NDArray[np.integer], tau: float,
+) -> tuple[FloatArray, IntArray, FloatArray]:
+    """:func:`cut_flat_wings` for ``tau > 0``: each blob's box scanned row by row for its
+    columns' top :math:`t(c)`, bottom and pixel count; the tall columns
+    (:math:`h(c) = b - t(c) + 1 \\ge \\tau \\max h`) grouped into runs, each run a part,
+    blob by blob in the order of ``ids``, left to right."""
+    n_rows = labels.shape[0]
+    total = 0
+    for i in range(ids.size):
+        total += stats[ids[i], 2]
+    boxes = np.empty((total, 4))
+    source = np.empty(total, np.intp)
+    area = np.empty(total)
+    k = 0
+    for i in range(ids.size):
+        lab = ids[i]
+        left, top, width, height = stats[lab, 0], stats[lab, 1], stats[lab, 2], stats[lab, 3]
+        col_top = np.full(width, n_rows, np.intp)
+        col_bottom = np.zeros(width, np.intp)
+        col_count = np.zeros(width, np.intp)
+        for r in range(top, top + height):
+            for c in range(width):
+                if labels[r, left + c] == lab:
+                    if col_top[c] == n_rows:
+                        col_top[c] = r
+                    col_bottom[c] = r
+                    col_count[c] += 1
+        base = top + height - 1  # the blob's lowest row
+        tallest = 0
+        for c in range(width):
+            if col_count[c] > 0:
+                tallest = max(tallest, base - col_top[c] + 1)
+        least = tau * tallest
+        run = False
+        x0 = x1 = y0 = y1 = 0
+        pixels = 0.0
+        for c in range(width):
+            if col_count[c] == 0:  # no pixel in the column (not for a connected blob)
+                continue
+            if base - col_top[c] + 1 >= least:  # a tall column: starts or extends a part
+                if run:
+                    x1 = c
+                    y0 = min(y0, col_top[c])
+                    y1 = max(y1, col_bottom[c])
+                    pixels += col_count[c]
+                else:
+                    run = True
+                    x0 = x1 = c
+                    y0, y1 = col_top[c], col_bottom[c]
+                    pixels = float(col_count[c])
+                continue
+            if run:  # a low column ends the part
+                boxes[k, 0], boxes[k, 1] = left + x0 - 0.5, y0 - 0.5
+                boxes[k, 2], boxes[k, 3] = x1 - x0 + 1, y1 - y0 + 1
+                source[k], area[k] = i, pixels
+                k += 1
+                run = False
+        if run:
+            boxes[k, 0], boxes[k, 1] = left + x0 - 0.5, y0 - 0.5
+            boxes[k, 2], boxes[k, 3] = x1 - x0 + 1, y1 - y0 + 1
+            source[k], area[k] = i, pixels
+            k += 1
+    return boxes[:k], source[:k], area[:k]
