@@ -370,6 +370,40 @@ def test_search_radius_is_each_tracks_gate() -> None:
     assert search_radii(iou, iou.tracks.uid, 20.0) == pytest.approx(20.0)
 
 
+def test_search_reads_the_gates_once_per_state_of_the_tracker() -> None:
+    """The searches before a tracker's step and inside it (the stopped vehicles' pieces, then
+    the rescue callback) read its gates once; after the step they are read anew, and the
+    radii are those of the tracker's new gates."""
+    from mvtrack import tracking
+    from mvtrack.types import Detections
+
+    tracker = _tracked(tracking.TrackerConfig(fps=30.0))
+    calls = []
+    gates = tracker.gates
+
+    def counted():
+        calls.append(1)
+        return gates()
+
+    tracker.gates = counted
+    rescuer = TemplateRescuer(TemplateBank(), tracker)
+    uids = tracker.tracks.uid
+    xy = np.array([[50.0, 40.0], [90.0, 80.0]])
+    wh = np.array([[18.0, 12.0], [36.0, 24.0]])
+    frame = np.zeros((120, 160, 3), np.uint8)
+    rescuer.search(frame)(uids, xy, wh)
+    rescuer.search(frame)(uids, xy, wh)
+    rescuer.callback(frame)(uids, xy, wh)
+    assert len(calls) == 1
+    before = rescuer.radii(uids, rescuer._gates_now())
+    tracker.step(Detections(10, np.zeros((0, 2)), np.zeros((0, 2))))  # both missed
+    rescuer.search(frame)(uids, xy, wh)
+    assert len(calls) == 2
+    after = rescuer.radii(uids, rescuer._gates_now())
+    np.testing.assert_allclose(after, search_radii(tracker, uids, 20.0))
+    assert (after > before).all()  # a missed track's gate opens
+
+
 @pytest.mark.parametrize(("th", "tw"), [(10, 18), (30, 20), (64, 40)])
 def test_masked_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None:
     import cv2

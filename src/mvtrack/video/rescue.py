@@ -433,6 +433,9 @@ class TemplateRescuer:
         self.max_radius = None if max_radius is None else float(max_radius)
         self.held_scores: HeldScores = NO_SCORES
         self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
+        # the tracker's gates, read once per state of the tracker (the searches before its
+        # step and inside it see the same one): (its track table, the gates)
+        self._gates: tuple[Any, Any] | None = None
 
     def attach(self, tracker: Any) -> None:
         """Use ``tracker`` (and forget templates of any previous one)."""
@@ -456,15 +459,22 @@ class TemplateRescuer:
         :meth:`TemplateBank.rescue`), with the best NCC of each track (NaN where it was not
         searched)."""
         bank = self.bank
-        frame_gates: list[Any] = []  # the tracker's gates of this frame, read once
 
         def search(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any, Any]:
-            if self._radius is None and not frame_gates and hasattr(self.tracker, "gates"):
-                frame_gates.append(self.tracker.gates())
-            gates = frame_gates[0] if frame_gates else None
-            return bank.rescue(frame, uids, predicted_xy, wh, self.radii(uids, gates))
+            return bank.rescue(frame, uids, predicted_xy, wh, self.radii(uids, self._gates_now()))
 
         return search
+
+    def _gates_now(self) -> Any:
+        """The tracker's gates for its next step (None: not needed, or no gates); computed
+        once per state of the tracker (a step replaces its track table)."""
+        tracker = self.tracker
+        if self._radius is not None or not hasattr(tracker, "gates"):
+            return None
+        table = getattr(tracker, "tracks", None)
+        if self._gates is None or self._gates[0] is not table or table is None:
+            self._gates = (table, tracker.gates())
+        return self._gates[1]
 
     def callback(self, frame: Image) -> RescueFn:
         """The ``rescue`` argument of ``tracker.step`` for ``frame``; the NCC scores of the
