@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack.detection.colourbg import ColourBackground, shadow_cells
+from mvtrack.detection.colourbg import ColourBackground, background_spread, shadow_cells
 
 
 def _reference(img, mu8, mu_grey_pad, mu_spread, fg, cand, step, lo, hi, chroma, texture,
@@ -86,7 +86,7 @@ def _scene(seed: int, h: int = 61, w: int = 83):
     changed = (np.abs(frame.astype(int) - mu8.astype(int)).max(axis=2) > 8)
     cand = ((darker & changed) * 255).astype(np.uint8)
     fg = ((changed | (rng.random((h, w)) < 0.05)) * 255).astype(np.uint8)
-    return frame, mu8, mu_grey_pad, mu_spread, fg, cand
+    return frame, mu8, mu_grey, mu_grey_pad, mu_spread, fg, cand
 
 
 PARAMS = (0.2, 0.95, 0.03, 2.0, 3.0, 0.8)
@@ -95,14 +95,14 @@ PARAMS = (0.2, 0.95, 0.03, 2.0, 3.0, 0.8)
 @pytest.mark.parametrize("step", [1, 2, 3])
 @pytest.mark.parametrize("seed", range(6))
 def test_shadow_cells_equal_the_array_statement(step: int, seed: int) -> None:
-    frame, mu8, mu_grey_pad, mu_spread, fg, cand = _scene(seed)
+    frame, mu8, mu_grey, mu_grey_pad, mu_spread, fg, cand = _scene(seed)
     want = _reference(frame, mu8, mu_grey_pad, mu_spread, fg, cand, step, *PARAMS)
     grey = cv2.copyMakeBorder(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                               cv2.BORDER_REPLICATE)
     pts = cv2.findNonZero(cand[::step, ::step]).reshape(-1, 2)
     for fn in (shadow_cells, shadow_cells.py_func):
         got = fg.copy()
-        fn(frame, mu8, grey, mu_grey_pad, mu_spread, got, cand, pts, step, *PARAMS)
+        fn(frame, mu8, grey, mu_grey, mu_grey_pad, got, cand, pts, step, *PARAMS)
         np.testing.assert_array_equal(got, want)
     # the scenes exercise both branches: some candidates are shadows, some are not
     assert (want != fg).any() and (want[cand > 0] > 0).any()
@@ -124,3 +124,19 @@ def test_dark_copy_of_the_road_is_shadow_its_own_texture_is_not() -> None:
     fg = model.apply(frame)
     assert fg[12:28, 12:28].mean() < 0.05 * 255
     assert fg[12:28, 47:63].mean() > 0.9 * 255
+
+
+@pytest.mark.parametrize("shape", [(48, 64), (1, 9), (9, 1), (2, 2)])
+def test_background_spread_equals_opencvs_box_filter(shape) -> None:
+    """The 3×3 spread of the grey background at any pixel, borders included, bit for bit
+    what ``cv2.blur`` gives over the whole image (and so what the shadow test used)."""
+    rng = np.random.default_rng(shape[0])
+    grey = rng.integers(0, 256, shape).astype(np.uint8)
+    grey[: shape[0] // 2] //= 16  # flat parts as well: a spread of 0
+    g = grey.astype(np.float32)
+    mean = cv2.blur(g, (3, 3))
+    want = cv2.sqrt(cv2.max(cv2.blur(g * g, (3, 3)) - mean * mean, 0.0)).reshape(shape)
+    for fn in (background_spread, background_spread.py_func):
+        got = np.array([[fn(grey, y, x) for x in range(shape[1])] for y in range(shape[0])],
+                       np.float32)
+        np.testing.assert_array_equal(got, want)

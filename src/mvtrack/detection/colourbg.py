@@ -244,13 +244,10 @@ class ColourBackground:
         self._thr = cv2.min(cv2.max(noise, floor), 254.0)
         # the background's edges, for the ghost test: made when a test first needs them
         self._mu_edges: NDArray[np.float32] | None = None
-        if self.shadows:  # the grey background (padded) and its local spread, for shadows
+        if self.shadows:  # the grey background, padded by one pixel, for shadows
             self._mu_grey = cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY)
             self._mu_grey_pad = cv2.copyMakeBorder(self._mu_grey, 1, 1, 1, 1,
                                                    cv2.BORDER_REPLICATE)
-            grey = self._mu_grey.astype(np.float32)
-            mean = cv2.blur(grey, (3, 3))
-            self._mu_spread = cv2.sqrt(cv2.max(cv2.blur(grey * grey, (3, 3)) - mean * mean, 0.0))
         self._stale = False
 
     # ------------------------------------------------------------------ frames
@@ -325,7 +322,7 @@ class ColourBackground:
         grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                                   cv2.BORDER_REPLICATE)
         lo, hi = self.shadow_ratio
-        shadow_cells(img, self._mu8, grey, self._mu_grey_pad, self._mu_spread, fg, cand,
+        shadow_cells(img, self._mu8, grey, self._mu_grey, self._mu_grey_pad, fg, cand,
                      pts.reshape(-1, 2), step, lo, hi, self.shadow_chroma,
                      self.shadow_texture, self.shadow_min_texture, self.shadow_correlation)
 
@@ -420,9 +417,37 @@ def _edges(grey: Image) -> NDArray[np.float32]:
 
 
 @kernel
+def background_spread(grey: Image, y: int, x: int) -> np.float32:
+    """The local spread of the grey background at ``(y, x)``: the standard deviation over
+    its 3×3 window, ``sqrt(max(blur(g²) − blur(g)², 0))`` with OpenCV's ``cv2.blur``
+    (mirrored border, ``BORDER_REFLECT_101``) in ``float32``: the window's sums are whole
+    numbers (exact), scaled by 1/9 in double precision and rounded to ``float32``, as
+    OpenCV's box filter does."""
+    h, w = grey.shape
+    s1 = 0.0
+    s2 = 0.0
+    for dy in range(-1, 2):
+        yy = abs(y + dy)  # mirrored at the top and the bottom (a row of one: itself)
+        if yy >= h:
+            yy = 2 * h - 2 - yy
+        yy = min(max(yy, 0), h - 1)
+        for dx in range(-1, 2):
+            xx = abs(x + dx)
+            if xx >= w:
+                xx = 2 * w - 2 - xx
+            xx = min(max(xx, 0), w - 1)
+            v = np.float64(grey[yy, xx])
+            s1 += v
+            s2 += v * v
+    mean = np.float32(s1 * (1.0 / 9.0))
+    var = np.float32(s2 * (1.0 / 9.0)) - mean * mean
+    return np.float32(math.sqrt(var)) if var > np.float32(0.0) else np.float32(0.0)
+
+
+@kernel
 def shadow_cells(
-    img: Image, mu8: Image, grey_pad: Image, mu_grey_pad: Image,
-    mu_spread: NDArray[np.float32], fg: Image, cand: Image, pts: NDArray[np.int32], step: int,
+    img: Image, mu8: Image, grey_pad: Image, mu_grey: Image, mu_grey_pad: Image, fg: Image,
+    cand: Image, pts: NDArray[np.int32], step: int,
     lo: float, hi: float, chroma: float, texture: float, min_texture: float,
     correlation: float,
 ) -> None:
@@ -438,14 +463,16 @@ def shadow_cells(
     - *colour kept*: :math:`\sum_c |f_c / L_f - m_c / L_m| <` ``chroma``, multiplied out by
       :math:`L_f L_m` (integers), and no texture of its own: the standard deviation
       :math:`s_f` of the frame's grey levels over the 3×3 window at most
-      :math:`(L_f / L_m)\, s_m +` ``texture`` (:math:`s_m`: ``mu_spread``, the background's);
+      :math:`(L_f / L_m)\, s_m +` ``texture`` (:math:`s_m`: the background's, as
+      :func:`background_spread`);
     - or *texture kept*: on a background with :math:`s_m >` ``min_texture``, the correlation
       of the frame's and the background's grey levels over the window above ``correlation``.
 
     A tested pixel that is a shadow clears the candidates of its ``step`` × ``step`` cell
     (itself at the top left). The window statistics are summed in ``float32`` in row order,
     as NumPy sums the nine offsets; ``grey_pad`` and ``mu_grey_pad`` are the frame's and the
-    background's grey levels padded by one pixel (replicated border).
+    background's grey levels padded by one pixel (replicated border), ``mu_grey`` the
+    background's unpadded.
     """
     h, w = fg.shape
     ninth = np.float32(9.0)
@@ -464,7 +491,7 @@ def shadow_cells(
             continue
         cross = abs(f0 * lm - m0 * lf) + abs(f1 * lm - m1 * lf) + abs(f2 * lm - m2 * lf)
         shadow = cross < chroma * np.float64(lf * lm)  # the colour kept
-        spread = mu_spread[y, x]
+        spread = background_spread(mu_grey, y, x)
         if shadow:  # ... and no texture of its own
             sa, saa = zero, zero
             for dy in range(3):
