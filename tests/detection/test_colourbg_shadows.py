@@ -11,10 +11,13 @@ import pytest
 from mvtrack.detection.colourbg import ColourBackground, background_spread, shadow_cells
 
 
-def _reference(img, mu8, mu_grey_pad, mu_spread, fg, cand, step, lo, hi, chroma, texture,
+def _reference(img, mu8, mu_hi, mu_grey_pad, mu_spread, fg, step, lo, hi, chroma, texture,
                min_texture, correlation):
-    """The test stated over arrays: gathers at the candidates, the window statistics summed in
-    float32 over the nine offsets in row order."""
+    """The test stated over arrays: the candidates (foreground not brighter than the
+    background's neighbourhood maximum in any channel, as whole images), gathers at them, the
+    window statistics summed in float32 over the nine offsets in row order."""
+    up = cv2.subtract(img, mu_hi)
+    cand = ((fg > 0) & (up.max(axis=2) == 0)).astype(np.uint8) * 255
     fg = fg.copy()
     ys, xs = np.nonzero(cand[::step, ::step])
     ys, xs = ys * step, xs * step
@@ -82,11 +85,10 @@ def _scene(seed: int, h: int = 61, w: int = 83):
     g = mu_grey.astype(np.float32)
     mean = cv2.blur(g, (3, 3))
     mu_spread = cv2.sqrt(cv2.max(cv2.blur(g * g, (3, 3)) - mean * mean, 0.0))
-    darker = (frame <= mu8).all(axis=2)
+    mu_hi = cv2.dilate(mu8, np.ones((3, 3), np.uint8))
     changed = (np.abs(frame.astype(int) - mu8.astype(int)).max(axis=2) > 8)
-    cand = ((darker & changed) * 255).astype(np.uint8)
     fg = ((changed | (rng.random((h, w)) < 0.05)) * 255).astype(np.uint8)
-    return frame, mu8, mu_grey, mu_grey_pad, mu_spread, fg, cand
+    return frame, mu8, mu_hi, mu_grey, mu_grey_pad, mu_spread, fg
 
 
 PARAMS = (0.2, 0.95, 0.03, 2.0, 3.0, 0.8)
@@ -95,17 +97,20 @@ PARAMS = (0.2, 0.95, 0.03, 2.0, 3.0, 0.8)
 @pytest.mark.parametrize("step", [1, 2, 3])
 @pytest.mark.parametrize("seed", range(6))
 def test_shadow_cells_equal_the_array_statement(step: int, seed: int) -> None:
-    frame, mu8, mu_grey, mu_grey_pad, mu_spread, fg, cand = _scene(seed)
-    want = _reference(frame, mu8, mu_grey_pad, mu_spread, fg, cand, step, *PARAMS)
+    frame, mu8, mu_hi, mu_grey, mu_grey_pad, mu_spread, fg = _scene(seed)
+    want = _reference(frame, mu8, mu_hi, mu_grey_pad, mu_spread, fg, step, *PARAMS)
     grey = cv2.copyMakeBorder(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                               cv2.BORDER_REPLICATE)
-    pts = cv2.findNonZero(cand[::step, ::step]).reshape(-1, 2)
+    pts = cv2.findNonZero(fg[::step, ::step]).reshape(-1, 2)
     for fn in (shadow_cells, shadow_cells.py_func):
         got = fg.copy()
-        fn(frame, mu8, grey, mu_grey, mu_grey_pad, got, cand, pts, step, *PARAMS)
+        fn(frame, mu8, mu_hi, grey, mu_grey, mu_grey_pad, got, pts, step, *PARAMS)
         np.testing.assert_array_equal(got, want)
-    # the scenes exercise both branches: some candidates are shadows, some are not
-    assert (want != fg).any() and (want[cand > 0] > 0).any()
+    # the scenes exercise every branch: shadows cleared, candidates kept, brighter pixels
+    # not tested
+    darker = (frame <= mu_hi).all(axis=2)
+    assert (want != fg).any() and (want[(fg > 0) & darker] > 0).any()
+    assert ((fg > 0) & ~darker).any()
 
 
 def test_dark_copy_of_the_road_is_shadow_its_own_texture_is_not() -> None:

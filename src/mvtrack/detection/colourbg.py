@@ -279,9 +279,8 @@ class ColourBackground:
         d = self._d = _channel_max(d3)
         fg = cv2.compare(d, self._thr, cv2.CMP_GT, dst=self._fg)  # eq. (2)
         self.distance = d
-        if self.shadows:  # a shadow is darker in every channel: not brighter in any
-            darker = cv2.compare(_channel_max(up), 0, cv2.CMP_EQ)
-            self._remove_shadows(img, fg, cv2.bitwise_and(fg, darker))
+        if self.shadows:  # among the foreground: darker in every channel
+            self._remove_shadows(img, fg)
         if self.ghost_every and self.frames_seen % self.ghost_every == 0:
             self._remove_ghosts(img, fg)
         self._update(img, fg, held)
@@ -312,17 +311,18 @@ class ColourBackground:
                 cv2.bitwise_and(run, 0.0, dst=run, mask=done)
                 self._stale = True
 
-    def _remove_shadows(self, img: Image, fg: Image, cand: Image) -> None:
+    def _remove_shadows(self, img: Image, fg: Image) -> None:
         """Shadow pixels of ``fg`` set to 0: the test of the module docstring on the
-        candidates ``cand`` only, one compiled pass over them (:func:`shadow_cells`)."""
+        foreground pixels not brighter than the background's neighbourhood in any channel
+        (a shadow is darker in every channel), one compiled pass (:func:`shadow_cells`)."""
         step = self.shadow_step
-        pts = cv2.findNonZero(cand[::step, ::step])  # the tested candidates, (x, y) / step
+        pts = cv2.findNonZero(fg[::step, ::step])  # the pixels tested, (x, y) / step
         if pts is None:
             return
         grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
                                   cv2.BORDER_REPLICATE)
         lo, hi = self.shadow_ratio
-        shadow_cells(img, self._mu8, grey, self._mu_grey, self._mu_grey_pad, fg, cand,
+        shadow_cells(img, self._mu8, self._hi, grey, self._mu_grey, self._mu_grey_pad, fg,
                      pts.reshape(-1, 2), step, lo, hi, self.shadow_chroma,
                      self.shadow_texture, self.shadow_min_texture, self.shadow_correlation)
 
@@ -417,6 +417,13 @@ def _edges(grey: Image) -> NDArray[np.float32]:
 
 
 @kernel
+def _darker(img: Image, mu_hi: Image, y: int, x: int) -> bool:
+    """Pixel ``(y, x)`` of ``img`` is not above ``mu_hi`` in any channel."""
+    return img[y, x, 0] <= mu_hi[y, x, 0] and img[y, x, 1] <= mu_hi[y, x, 1] and (
+        img[y, x, 2] <= mu_hi[y, x, 2])
+
+
+@kernel
 def background_spread(grey: Image, y: int, x: int) -> np.float32:
     """The local spread of the grey background at ``(y, x)``: the standard deviation over
     its 3×3 window, ``sqrt(max(blur(g²) − blur(g)², 0))`` with OpenCV's ``cv2.blur``
@@ -446,14 +453,16 @@ def background_spread(grey: Image, y: int, x: int) -> np.float32:
 
 @kernel
 def shadow_cells(
-    img: Image, mu8: Image, grey_pad: Image, mu_grey: Image, mu_grey_pad: Image, fg: Image,
-    cand: Image, pts: NDArray[np.int32], step: int,
+    img: Image, mu8: Image, mu_hi: Image, grey_pad: Image, mu_grey: Image, mu_grey_pad: Image,
+    fg: Image, pts: NDArray[np.int32], step: int,
     lo: float, hi: float, chroma: float, texture: float, min_texture: float,
     correlation: float,
 ) -> None:
     r"""Clear the shadow cells of ``fg`` (in place): the shadow test of the module docstring
-    on the candidates ``pts`` (``(x, y)`` in units of ``step`` px: every ``step``-th
-    candidate of ``cand`` along each row and column).
+    on the candidates among the pixels ``pts`` (``(x, y)`` in units of ``step`` px: every
+    ``step``-th foreground pixel along each row and column). A candidate is a foreground
+    pixel darker in every channel: not above the neighbourhood maximum ``mu_hi`` of the
+    background (:math:`\hat\mu` of eq. (1)) in any.
 
     For a candidate with frame colour :math:`f` and background colour :math:`m` (grey levels
     plus one, so that black has a colour) and brightnesses :math:`L_f = \sum_c f_c`,
@@ -482,6 +491,8 @@ def shadow_cells(
     correlation32 = np.float32(correlation)
     for k in range(pts.shape[0]):
         x, y = pts[k, 0] * step, pts[k, 1] * step
+        if not _darker(img, mu_hi, y, x):
+            continue
         f0, f1, f2 = np.int64(img[y, x, 0]) + 1, np.int64(img[y, x, 1]) + 1, np.int64(
             img[y, x, 2]) + 1
         m0, m1, m2 = np.int64(mu8[y, x, 0]) + 1, np.int64(mu8[y, x, 1]) + 1, np.int64(
@@ -525,7 +536,7 @@ def shadow_cells(
         if shadow:  # the cell of the tested pixel, where it holds candidates
             for yy in range(y, min(y + step, h)):
                 for xx in range(x, min(x + step, w)):
-                    if cand[yy, xx] != 0:
+                    if fg[yy, xx] != 0 and _darker(img, mu_hi, yy, xx):
                         fg[yy, xx] = 0
 
 
