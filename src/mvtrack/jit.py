@@ -47,6 +47,7 @@ KERNEL_MODULES = (
     "tracking/step.py",
     "detection/colourbg.py",
     "detection/wings.py",
+    "detection/ncc.py",
 )
 
 __all__ = ["COMPILED", "KERNEL_MODULES", "cache_dir", "kernel", "python_call"]

@@ -405,21 +405,41 @@ def test_search_reads_the_gates_once_per_state_of_the_tracker() -> None:
 
 
 @pytest.mark.parametrize(("th", "tw"), [(10, 18), (30, 20), (64, 40)])
-def test_masked_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None:
+def test_gate_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None:
+    """Over the whole window (an unbounded gate) the masked NCC is OpenCV's
+    ``TM_CCOEFF_NORMED`` with the mask; in a circular gate, the placements outside it are
+    left out and the best is the best inside (the plain function the same)."""
     import cv2
 
-    from mvtrack.detection.ncc import Template, masked_ncc
+    from mvtrack.detection.ncc import Template, gate_ncc
 
     rng = np.random.default_rng(th)
-    win = cv2.GaussianBlur(rng.integers(0, 256, (th + 41, tw + 41), dtype=np.uint8), (5, 5), 0)
+    win = cv2.GaussianBlur(rng.integers(0, 256, (th + 41, 2 * tw + 41), dtype=np.uint8), (5, 5),
+                           0)
     patch = win[7 : 7 + th, 11 : 11 + tw].copy()
     mask = np.zeros_like(patch)
     mask[th // 4 :, tw // 5 :] = 255
+    win[:, -(tw + 3) :] = 77  # a flat strip: flat placements where the mask sees only it
     t = Template(patch, mask, (0.0, 0.0), 0)
-    ours = masked_ncc(win, t.tz, t.mf, t.var_t)
     ref = cv2.matchTemplate(win, patch, cv2.TM_CCOEFF_NORMED, mask=mask)
-    np.testing.assert_allclose(ours, ref, atol=2e-4)
-    assert np.unravel_index(np.argmax(ours), ours.shape) == (7, 11)
+    out = np.empty(ref.shape)
+    best, i, c = gate_ncc(win, t.rows, t.cols, t.tz, t.var_t, 0.0, 0.0, np.inf, out)
+    flat = ~np.isfinite(ref)  # OpenCV: NaN
+    assert flat.any() and np.array_equal(out == -2, flat)
+    np.testing.assert_allclose(out[~flat], ref[~flat], atol=2e-5)
+    assert (i, c) == (7, 11) and best == pytest.approx(1.0)
+    # a gate of radius 5 about placement (20, 25): the best inside it, nothing outside
+    for fn in (gate_ncc, gate_ncc.py_func):
+        gated = np.empty(ref.shape)
+        best, i, c = fn(win, t.rows, t.cols, t.tz, t.var_t, -25.0, -20.0, 25.0, gated)
+        yy, xx = np.mgrid[: ref.shape[0], : ref.shape[1]]
+        inside = (xx - 25.0) ** 2 + (yy - 20.0) ** 2 <= 25.0
+        assert np.isneginf(gated[~inside]).all()
+        np.testing.assert_allclose(gated[inside], out[inside], atol=1e-12)
+        k = np.flatnonzero(inside.ravel())[np.argmax(out.ravel()[inside.ravel()])]
+        assert (i, c) == divmod(int(k), ref.shape[1]) and best == out.ravel()[k]
+    # no placement inside the gate
+    assert gate_ncc(win, t.rows, t.cols, t.tz, t.var_t, 1e3, 1e3, 1.0, out)[2] == -1
 
 
 def test_search_radius_is_capped_by_max_radius() -> None:

@@ -1,9 +1,10 @@
 """Normalised cross-correlation of a stored appearance, over its object's pixels only.
 
 :class:`Template` is one stored appearance (a grey patch, its object mask, the box centre
-inside it) with the terms of :func:`masked_ncc` computed once, cut from a frame by
-:func:`cut_template`; the search over a window is :func:`masked_ncc` (with a mask) or OpenCV's
-``TM_CCOEFF_NORMED`` (without), inside a circular gate by :func:`search_gate`, which
+inside it) with the terms of :func:`gate_ncc` computed once, cut from a frame by
+:func:`cut_template`; the search over a window is :func:`gate_ncc` (with a mask: one compiled
+pass over the placements inside the gate) or OpenCV's ``TM_CCOEFF_NORMED`` (without), inside
+a circular gate by :func:`search_gate`, which
 :meth:`mvtrack.detection.template.TemplateBank.rescue` runs for each missed track.
 """
 
@@ -15,6 +16,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack.jit import kernel
+
 Image = NDArray[np.uint8]
 
 
@@ -25,9 +28,11 @@ def grey(img: Image) -> Image:
 
 class Template:
     """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
-    the observation tick; for a masked template also the terms of :func:`masked_ncc`."""
+    the observation tick; for a masked template also the terms of :func:`gate_ncc`: the mask's
+    pixels (``rows``, ``cols``), :math:`T - \\bar T` at them (``tz``), their number ``n`` and
+    :math:`\\sum_M (T - \\bar T)^2` (``var_t``)."""
 
-    __slots__ = ("gate", "mask", "mf", "n", "offset", "patch", "tick", "tz", "var_t")
+    __slots__ = ("cols", "gate", "mask", "n", "offset", "patch", "rows", "tick", "tz", "var_t")
 
     def __init__(
         self,
@@ -46,24 +51,22 @@ class Template:
         # around the same place frame after frame, so the mask is usually reused
         self.gate: tuple[tuple[int, int, float, float, float], Image] | None = None
         if mask is not None:
-            self.mf = (mask > 0).astype(np.float32)
-            self.n = float(cv2.countNonZero(mask))
+            rows, cols = np.nonzero(mask)
+            self.rows, self.cols = rows.astype(np.intp), cols.astype(np.intp)
+            self.n = float(rows.size)
             if mean is None:
                 mean = cv2.mean(patch, mask)[0]
-            self.tz = patch.astype(np.float32)
-            self.tz -= mean
-            self.tz *= self.mf  # T − T̄ on the mask, 0 off it
-            self.var_t = float(cv2.norm(self.tz, cv2.NORM_L2SQR))
+            self.tz = patch[rows, cols].astype(np.float64) - mean  # T − T̄ on the mask
+            self.var_t = float(np.dot(self.tz, self.tz))
 
 
-def masked_ncc(
-    window: Image,
-    tz: NDArray[np.float32],
-    mf: NDArray[np.float32],
-    var_t: float,
-    n: float | None = None,
-) -> NDArray[np.float32]:
-    r"""NCC of a template over its mask pixels ``M`` only, at every placement in ``window``.
+@kernel
+def gate_ncc(
+    window: Image, rows: NDArray[np.intp], cols: NDArray[np.intp], tz: NDArray[np.float64],
+    var_t: float, dx0: float, dy0: float, r2: float, out: NDArray[np.float64],
+) -> tuple[float, int, int]:
+    r"""NCC of a template over its mask pixels ``M`` only, at the placements of ``window``
+    inside a circular gate; the best of them.
 
     .. math::
 
@@ -72,33 +75,51 @@ def masked_ncc(
         \quad \sum_M (T - \bar T)(I_u - \bar I_u) = \sum_M (T - \bar T) I_u,
         \quad \sum_M (I_u - \bar I_u)^2 = \sum_M I_u^2 - \tfrac{1}{n}\big(\sum_M I_u\big)^2,
 
-    with means over the ``n`` mask pixels: three plain correlations (``cv2.TM_CCORR``; the
-    two with the mask in one call, over the window stacked on its square), the same values as
-    ``cv2.matchTemplate(..., TM_CCOEFF_NORMED, mask=M)`` (to ~1e-5) at a third to two thirds
-    of its cost. ``tz`` is :math:`(T - \bar T)` on the mask and 0 off it, ``mf``
-    the mask as 0/1 floats, ``var_t`` :math:`\sum_M (T - \bar T)^2`, ``n`` the number of mask
-    pixels (counted if not given). Flat placements give NaN.
+    with means over the ``n`` mask pixels (``rows``, ``cols`` in the template; ``tz`` is
+    :math:`T - \bar T` at them, ``var_t`` :math:`\sum_M (T - \bar T)^2`): OpenCV's
+    ``matchTemplate(..., TM_CCOEFF_NORMED, mask=M)``, in double precision, the window's grey
+    levels taken relative to their mean. Placement ``(i, c)`` (the template's top-left corner
+    at row ``i``, column ``c`` of the window) lies in the gate when
+    :math:`(c + dx_0)^2 + (i + dy_0)^2 \le r^2` (its offset from the gate's centre); ``out``
+    (``window`` less the template, plus one, in each direction) gets the NCC there, −2 where
+    the window is flat under the mask, −inf outside the gate.
 
-    On the small windows of a gate search the fixed cost of each call dominates, so the
-    arithmetic is done in place on the correlation outputs (a few element-wise operations).
+    Returns
+    -------
+    (best, i, c)
+        The largest value of ``out`` and its first placement in row order; ``c = -1`` when no
+        placement lies in the gate.
     """
-    if n is None:
-        n = float(mf.sum())
-    h = window.shape[0]
-    both = np.empty((2 * h, window.shape[1]), np.float32)  # [I ; I²], one correlation for both
-    w = both[:h]
-    np.subtract(window, cv2.mean(window)[0], out=w, casting="unsafe")  # smaller sums below
-    np.multiply(w, w, out=both[h:])
-    num = cv2.matchTemplate(w, tz, cv2.TM_CCORR)  # Σ_M (T − T̄) I_u
-    sums = cv2.matchTemplate(both, mf, cv2.TM_CCORR)  # rows straddling the seam are unused
-    s1, var_i = sums[: h - mf.shape[0] + 1], sums[h:]  # Σ_M I_u, Σ_M I_u²
-    var_i -= s1 * s1 * (1.0 / n)  # Σ_M (I_u − Ī_u)²
-    flat = var_i <= 1e-6 * n
-    np.maximum(var_i, 1e-6 * n, out=var_i)
-    var_i *= var_t
-    num /= np.sqrt(var_i, out=var_i)
-    num[flat] = np.nan
-    return num
+    h_out, w_out = out.shape
+    n = rows.size
+    mean = 0.0
+    for y in range(window.shape[0]):
+        for x in range(window.shape[1]):
+            mean += window[y, x]
+    mean /= window.shape[0] * window.shape[1]
+    flat = 1e-6 * n
+    best, bi, bc = -np.inf, -1, -1
+    for i in range(h_out):
+        cy = i + dy0
+        for c in range(w_out):
+            cx = c + dx0
+            if cx * cx + cy * cy > r2:
+                out[i, c] = -np.inf
+                continue
+            num = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            for k in range(n):
+                v = window[i + rows[k], c + cols[k]] - mean
+                num += tz[k] * v
+                s1 += v
+                s2 += v * v
+            var_i = s2 - s1 * s1 / n
+            value = -2.0 if var_i <= flat else num / math.sqrt(var_i * var_t)
+            out[i, c] = value
+            if value > best:
+                best, bi, bc = value, i, c
+    return best, bi, bc
 
 
 def grey_region(frame: Image, x0: int, y0: int, x1: int, y1: int, smooth: float, pad: int) -> Image:
@@ -162,7 +183,7 @@ def search_gate(
     r"""Best NCC of template ``t`` over the placements whose box centre is within ``r`` of
     ``(px, py)``.
 
-    The NCC (``cv2.TM_CCOEFF_NORMED``, or :func:`masked_ncc` for a masked template) is
+    The NCC (``cv2.TM_CCOEFF_NORMED``, or :func:`gate_ncc` for a masked template) is
     evaluated on the window of ``frame`` around the gate (grey, smoothed as in
     :func:`grey_region`, clipped to the image), then maximised inside the circle.
 
@@ -185,10 +206,14 @@ def search_gate(
     x0, y0 = max(tx - ri, 0), max(ty - ri, 0)
     x1, y1 = min(tx + ri + pw, width), min(ty + ri + ph, height)
     window = grey_region(frame, x0, y0, x1, y1, smooth, pad)
-    if t.mask is None:
-        ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
-    else:  # NCC over the object's pixels only
-        ncc = masked_ncc(window, t.tz, t.mf, t.var_t, t.n)
+    if t.mask is not None:  # NCC over the object's pixels only, in the gate
+        out = np.empty((window.shape[0] - ph + 1, window.shape[1] - pw + 1))
+        best, i, c = gate_ncc(window, t.rows, t.cols, t.tz, t.var_t, x0 + ox - px,
+                              y0 + oy - py, r * r, out)
+        if c < 0 or best < -1.0:  # nothing inside the gate, or only flat placements
+            return None
+        return best, x0 + c + ox, y0 + i + oy
+    ncc = cv2.matchTemplate(window, t.patch, cv2.TM_CCOEFF_NORMED)
     cv2.patchNaNs(ncc, -2.0)  # flat placements: no correlation
     # centre of placement (row i, col c) is (x0 + c + ox, y0 + i + oy); circular gate
     key = (*ncc.shape, x0 + ox - px, y0 + oy - py, r2)
