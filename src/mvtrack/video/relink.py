@@ -144,12 +144,16 @@ class Relinker:
         self._grow(int(ids.max()) + 1 if ids.size else 0)
         k = tracks.frame
         alive = ids if live is None else np.asarray(live, np.int64)
-        gone = np.setdiff1d(self._live, alive)
+        gone = self._live  # the IDs of the last frame no longer alive (sorted, distinct)
+        if gone.size and alive.size:
+            seen = np.zeros(int(max(gone.max(), alive.max())) + 1, bool)
+            seen[alive[alive > 0]] = True
+            gone = gone[~seen[gone]]
         if gone.size:
             self._ended = np.concatenate([self._ended, gone])
         if self._ended.size:  # forget what ended too long ago
             self._ended = self._ended[k - self._last[self._ended, 0] <= self.window]
-        self._live = alive[alive > 0]
+        self._live = np.unique(alive[alive > 0])
         new = ids[self._ids[ids] == 0]
         self._ids[new] = new
         rows = pub.nonzero()[0]
