@@ -503,32 +503,29 @@ def shadow_cells(
         cross = abs(f0 * lm - m0 * lf) + abs(f1 * lm - m1 * lf) + abs(f2 * lm - m2 * lf)
         shadow = cross < chroma * np.float64(lf * lm)  # the colour kept
         spread = background_spread(mu_grey, y, x)
+        sa, saa = zero, zero  # the frame's 3×3 window: sum and sum of squares
+        for dy in range(3):
+            for dx in range(3):
+                va = np.float32(grey_pad[y + dy, x + dx])
+                sa += va
+                saa += va * va
+        ma = sa / ninth
+        var_a = saa / ninth - ma * ma
+        var_a = var_a if var_a > zero else zero
         if shadow:  # ... and no texture of its own
-            sa, saa = zero, zero
-            for dy in range(3):
-                for dx in range(3):
-                    va = np.float32(grey_pad[y + dy, x + dx])
-                    sa += va
-                    saa += va * va
-            ma = sa / ninth
-            var = saa / ninth - ma * ma
-            s_f = np.float32(math.sqrt(var if var > zero else zero))
+            s_f = np.float32(math.sqrt(var_a))
             shadow = np.float64(s_f) <= (lf / lm) * np.float64(spread) + texture
         if not shadow and spread > min_texture32:  # the background's texture kept
-            sa, saa, sb, sbb, sab = zero, zero, zero, zero, zero
+            sb, sbb, sab = zero, zero, zero
             for dy in range(3):
                 for dx in range(3):
                     va = np.float32(grey_pad[y + dy, x + dx])
                     vb = np.float32(mu_grey_pad[y + dy, x + dx])
-                    sa += va
-                    saa += va * va
                     sb += vb
                     sbb += vb * vb
                     sab += va * vb
-            ma, mb = sa / ninth, sb / ninth
-            var_a = saa / ninth - ma * ma
+            mb = sb / ninth
             var_b = sbb / ninth - mb * mb
-            var_a = var_a if var_a > zero else zero
             var_b = var_b if var_b > zero else zero
             cov = sab / ninth - ma * mb
             rho = cov / np.float32(math.sqrt(var_a * var_b + tiny))

@@ -29,10 +29,10 @@ def grey(img: Image) -> Image:
 class Template:
     """One stored appearance: grey patch, its object mask (or None), the box centre inside it,
     the observation tick; for a masked template also the terms of :func:`gate_ncc`: the mask's
-    pixels (``rows``, ``cols``), :math:`T - \\bar T` at them (``tz``), their number ``n`` and
+    pixels (``rows``, ``cols``), :math:`T - \\bar T` at them (``tz``) and
     :math:`\\sum_M (T - \\bar T)^2` (``var_t``)."""
 
-    __slots__ = ("cols", "gate", "mask", "n", "offset", "patch", "rows", "tick", "tz", "var_t")
+    __slots__ = ("cols", "gate", "mask", "offset", "patch", "rows", "tick", "tz", "var_t")
 
     def __init__(
         self,
@@ -53,7 +53,6 @@ class Template:
         if mask is not None:
             rows, cols = np.nonzero(mask)
             self.rows, self.cols = rows.astype(np.intp), cols.astype(np.intp)
-            self.n = float(rows.size)
             if mean is None:
                 mean = cv2.mean(patch, mask)[0]
             self.tz = patch[rows, cols].astype(np.float64) - mean  # T − T̄ on the mask

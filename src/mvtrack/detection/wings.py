@@ -112,30 +112,19 @@ def wing_parts(
         run = False
         x0 = x1 = y0 = y1 = 0
         pixels = 0.0
-        for c in range(width):
-            if col_count[c] == 0:  # no pixel in the column (not for a connected blob)
+        for c in range(width + 1):  # one past the last column: it ends the last part
+            if c < width and col_count[c] == 0:  # no pixel (not for a connected blob)
                 continue
-            if base - col_top[c] + 1 >= least:  # a tall column: starts or extends a part
-                if run:
-                    x1 = c
-                    y0 = min(y0, col_top[c])
-                    y1 = max(y1, col_bottom[c])
-                    pixels += col_count[c]
-                else:
-                    run = True
-                    x0 = x1 = c
-                    y0, y1 = col_top[c], col_bottom[c]
-                    pixels = float(col_count[c])
-                continue
-            if run:  # a low column ends the part
+            if c < width and base - col_top[c] + 1 >= least:  # tall: starts or extends
+                if not run:
+                    run, x0, y0, y1, pixels = True, c, col_top[c], col_bottom[c], 0.0
+                x1 = c
+                y0, y1 = min(y0, col_top[c]), max(y1, col_bottom[c])
+                pixels += col_count[c]
+            elif run:  # a low column (or the box's end) ends the part
                 boxes[k, 0], boxes[k, 1] = left + x0 - 0.5, y0 - 0.5
                 boxes[k, 2], boxes[k, 3] = x1 - x0 + 1, y1 - y0 + 1
                 source[k], area[k] = i, pixels
                 k += 1
                 run = False
-        if run:
-            boxes[k, 0], boxes[k, 1] = left + x0 - 0.5, y0 - 0.5
-            boxes[k, 2], boxes[k, 3] = x1 - x0 + 1, y1 - y0 + 1
-            source[k], area[k] = i, pixels
-            k += 1
     return boxes[:k], source[:k], area[:k]
