@@ -48,6 +48,8 @@ KERNEL_MODULES = (
     "detection/colourbg.py",
     "detection/wings.py",
     "detection/ncc.py",
+    "detection/kinds.py",
+    "video/relink.py",
 )
 
 __all__ = ["COMPILED", "KERNEL_MODULES", "cache_dir", "kernel", "python_call"]

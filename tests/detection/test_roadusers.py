@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from mvtrack.detection import make_detector
+from mvtrack.detection import kinds, make_detector
 from mvtrack.detection.colourbg import ColourBackground
-from mvtrack.detection.kinds import KindModel, _weighted_mean, robust_plane
+from mvtrack.detection.kinds import KindModel, robust_plane
 from mvtrack.detection.roadusers import RoadUserDetector, _label, _label_all, morph_around
 from mvtrack.detection.waists import cut_at_waists, join_fragments
 from mvtrack.eval import iou_matrix
@@ -673,15 +673,47 @@ def test_opening_and_closing_around_the_foreground_equal_opencvs(seed: int) -> N
         morph_around(empty, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8)), empty)
 
 
-def test_the_clusterings_weighted_mean_is_numpys_average_to_the_bit() -> None:
+def _numpy_lloyd(points: np.ndarray, weight: np.ndarray, centres: np.ndarray,
+                 iterations: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """Lloyd's weighted k-means written with NumPy's reductions (the reference)."""
+    centres = centres.copy()
+    labels = np.zeros(len(points), np.intp)
+    for it in range(iterations):
+        new = ((points[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
+        if it and np.array_equal(new, labels):
+            break
+        labels = new
+        for j in range(len(centres)):
+            sel = labels == j
+            if sel.any():
+                centres[j] = np.average(points[sel], axis=0, weights=weight[sel])
+    return centres, labels
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_clusterings_sums_are_numpys_to_the_bit(compiled: bool) -> None:
+    """The compiled k-means (and the plain function it is compiled from) gives NumPy's
+    centres and labels bit for bit: NumPy adds the weights pairwise and the weighted points
+    row by row, and so does the kernel."""
+    lloyd = kinds.lloyd if compiled else kinds.lloyd.py_func
+    psum = kinds.pairwise_sum if compiled else kinds.pairwise_sum.py_func
     rng = np.random.default_rng(7)
-    for n in (1, 2, 3, 17, 400, 1999):
-        points = rng.normal(size=(n, 2)) * rng.uniform(0.1, 100)
+    for n in (1, 2, 3, 7, 8, 9, 17, 128, 129, 135, 400, 1999):
+        a = rng.uniform(0, 1000, n) ** rng.uniform(0.5, 3)
+        assert psum(a) == a.sum()
+    for trial in range(60):
+        n = int(rng.integers(5, 450))
+        k = int(rng.integers(1, 4))
+        points = rng.normal(size=(n, 2)) * rng.uniform(0.1, 3) + rng.normal(size=(1, 2))
+        if trial % 3 == 0:  # repeated points: ties between centres
+            points = np.round(points, 1)
         weight = rng.uniform(0, 1000, n) ** rng.uniform(0.5, 3)
-        expected = np.average(points, axis=0, weights=weight)
-        got = _weighted_mean(points, weight)
-        assert got.dtype == expected.dtype and got.shape == expected.shape
-        assert np.array_equal(got, expected)
+        start = points[rng.choice(n, k, replace=False)]
+        ref_c, ref_l = _numpy_lloyd(points, weight, start)
+        centres, labels = start.copy(), np.zeros(n, np.intp)
+        lloyd(points, weight, centres, labels, 20)
+        assert np.array_equal(labels, ref_l)
+        assert np.array_equal(centres, ref_c)
 
 
 @pytest.mark.parametrize("threads", [1, 2])

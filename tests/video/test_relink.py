@@ -9,6 +9,7 @@ import pytest
 
 from mvtrack.config import RelinkSettings, RunSettings
 from mvtrack.types import TrackFrame, TrackState
+from mvtrack.video import relink as relink_module
 from mvtrack.video.relink import (
     BINS,
     GREYS,
@@ -23,11 +24,16 @@ from mvtrack.video.run import track_to_folder
 RED, BLUE = (40, 40, 220), (220, 60, 40)  # BGR
 
 
+@pytest.mark.parametrize("compiled", [True, False])
 @pytest.mark.parametrize("seed", [0, 1])
-def test_box_histograms_count_the_sampled_pixels_of_each_box(seed) -> None:
+def test_box_histograms_count_the_sampled_pixels_of_each_box(seed, compiled, monkeypatch) -> None:
+    if not compiled:  # the plain functions the kernels are compiled from
+        monkeypatch.setattr(relink_module, "sample_pixels", relink_module.sample_pixels.py_func)
+        monkeypatch.setattr(relink_module, "count_bins", relink_module.count_bins.py_func)
     rng = np.random.default_rng(seed)
     img = rng.integers(0, 256, (50, 70, 3), dtype=np.uint8)
     boxes = np.column_stack([rng.uniform(-10, 60, (6, 2)), rng.uniform(3, 30, (6, 2))])
+    boxes[2] = [80.0, 10.0, 5.0, 5.0]  # outside the image: zeros
     got = box_histograms(img, boxes)
     for b, row in zip(boxes, got, strict=True):  # the reference: one box at a time
         x0 = int(np.clip(b[0] + 0.2 * b[2], 0, 70))
@@ -44,8 +50,11 @@ def test_box_histograms_count_the_sampled_pixels_of_each_box(seed) -> None:
                     ref[HUES * SATS + int(v) * GREYS // 256] += 1
         if ref.sum():
             ref /= ref.sum()
-        np.testing.assert_allclose(row, ref)
+        np.testing.assert_array_equal(row, ref)
+    assert not got[2].any()
     assert box_histograms(img, np.zeros((0, 4))).shape == (0, BINS)
+    nan = box_histograms(img, np.array([[np.nan, 5.0, 10.0, 10.0], [5.0, 5.0, 20.0, 20.0]]))
+    assert not nan[0].any() and nan[1].sum() == pytest.approx(1.0)
 
 
 def _frame(k: int, ids: list[int], xs: list[float], vx: float = 3.0) -> TrackFrame:

@@ -34,6 +34,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from mvtrack.jit import kernel
+
 FloatArray = NDArray[np.float64]
 
 
@@ -81,34 +83,85 @@ def _weighted_median(values: FloatArray, weight: FloatArray) -> float:
     return float(values[order][np.searchsorted(cum, 0.5 * cum[-1])])
 
 
-def _weighted_mean(points: FloatArray, weight: FloatArray) -> FloatArray:
-    """``np.average(points, axis=0, weights=weight)`` to the bit (the same products and sums
-    in the same order), without its checks: it is called in the clustering's inner loop."""
-    w = weight[:, None]
-    return np.multiply(points, w).sum(axis=0) / w.sum(axis=0)
-
-
 def _kmeans(points: FloatArray, weight: FloatArray, k: int, iterations: int = 20
             ) -> tuple[FloatArray, NDArray[np.intp]]:
     """Centres and labels of ``k`` weighted clusters (deterministic start: weighted quantiles
-    along the axis of largest spread)."""
+    along the axis of largest spread; then Lloyd's iterations, :func:`lloyd`)."""
     axis = int(np.argmax(points.std(axis=0)))
     order = np.argsort(points[:, axis])
     cum = np.cumsum(weight[order]) / weight.sum()
     start = order[np.minimum(np.searchsorted(cum, (np.arange(k) + 0.5) / k), len(order) - 1)]
-    centres = points[start].copy()
+    centres = np.ascontiguousarray(points[start])
     labels = np.zeros(len(points), np.intp)
-    for _ in range(iterations):
-        d = ((points[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
-        new = d.argmin(axis=1)
-        if _ and np.array_equal(new, labels):
-            break
-        labels = new
-        for j in range(k):  # k ≤ max_kinds (3) cluster means
-            sel = labels == j
-            if sel.any():
-                centres[j] = _weighted_mean(points[sel], weight[sel])
+    lloyd(np.ascontiguousarray(points, np.float64), np.ascontiguousarray(weight, np.float64),
+          centres, labels, iterations)
     return centres, labels
+
+
+@kernel
+def pairwise_sum(a: FloatArray) -> float:
+    """``a.sum()`` as NumPy adds a contiguous float array (pairwise, eight partial sums
+    under 128 values), to the bit."""
+    n = a.size
+    if n < 8:
+        s = 0.0
+        for i in range(n):
+            s += a[i]
+        return s
+    if n <= 128:
+        r = a[:8].copy()
+        m = n - n % 8
+        for i in range(8, m, 8):
+            for j in range(8):
+                r[j] += a[i + j]
+        s = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+        for i in range(m, n):
+            s += a[i]
+        return s
+    half = n // 2
+    half -= half % 8
+    return pairwise_sum(a[:half]) + pairwise_sum(a[half:])
+
+
+@kernel
+def lloyd(points: FloatArray, weight: FloatArray, centres: FloatArray,
+          labels: NDArray[np.intp], iterations: int) -> None:
+    """Lloyd's iterations of weighted k-means from ``centres`` (K, D), in place: each point
+    to its nearest centre (squared distance, the first of equals), each centre to the
+    weighted mean of its points, until the labels repeat or ``iterations`` passes. The
+    same sums in the same order as NumPy's ``((p - c) ** 2).sum(axis=1)`` and
+    ``np.average(points, axis=0, weights=w)`` (finite ``points``, ``D < 8``)."""
+    n, dim = points.shape
+    k = centres.shape[0]
+    new = np.empty(n, np.intp)
+    member = np.empty(n)
+    for it in range(iterations):
+        for i in range(n):
+            best, arg = np.inf, 0
+            for j in range(k):
+                d = 0.0
+                for c in range(dim):
+                    e = points[i, c] - centres[j, c]
+                    d += e * e
+                if d < best:
+                    best, arg = d, j
+            new[i] = arg
+        if it > 0 and (new == labels).all():
+            break
+        labels[:] = new
+        for j in range(k):  # each centre: sum of w p in point order over sum of w
+            m = 0
+            num = np.zeros(dim)
+            for i in range(n):
+                if labels[i] == j:
+                    for c in range(dim):
+                        num[c] += points[i, c] * weight[i]
+                    member[m] = weight[i]
+                    m += 1
+            if m:
+                den = pairwise_sum(member[:m])
+                for c in range(dim):
+                    centres[j, c] = num[c] / den
 
 
 def _bic(points: FloatArray, weight: FloatArray, centres: FloatArray,

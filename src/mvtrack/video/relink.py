@@ -31,7 +31,7 @@ rewritten afterwards, so the annotated video, ``results.txt`` and ``states.csv``
 The histogram: pixels of the box's central part (x from 20 % to 80 % of the width, y from
 10 % to 90 % of the height, every second row and column) in HSV; a pixel with saturation
 ≥ 60 falls into one of 8 hues × 3 saturations, a grey one into one of 4 brightnesses
-(:func:`box_histograms`, one ``bincount`` for all boxes of a frame).
+(:func:`box_histograms`, all boxes of a frame in one compiled pass).
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 from mvtrack.config import RelinkSettings
+from mvtrack.jit import kernel
 from mvtrack.types import TrackFrame
 
 Image = NDArray[np.uint8]
@@ -60,12 +61,16 @@ MIN_SATURATION = 60
 def box_histograms(image: Image, tlwh: FloatArray, step: int = 2) -> FloatArray:
     """Normalised colour histograms (K, :data:`BINS`) of the central part of the boxes
     ``tlwh`` (K, 4) of a BGR ``image``, every ``step``-th row and column; all boxes at once.
-    A box with no pixel in the image gets a row of zeros."""
+    A box with no pixel in the image (or not a finite box) gets a row of zeros.
+
+    The sampled pixels of every box are gathered into one row (:func:`sample_pixels`), turned
+    to HSV by one ``cv2.cvtColor`` and counted into their boxes' bins (:func:`count_bins`)."""
     h_img, w_img = image.shape[:2]
     b = np.asarray(tlwh, np.float64).reshape(-1, 4)
     k = b.shape[0]
     if k == 0:
         return np.zeros((0, BINS))
+    b = np.where(np.isfinite(b).all(axis=1, keepdims=True), b, 0.0)
     x0 = np.clip(b[:, 0] + 0.2 * b[:, 2], 0, w_img).astype(np.int64)
     x1 = np.clip(b[:, 0] + 0.8 * b[:, 2], 0, w_img).astype(np.int64)
     y0 = np.clip(b[:, 1] + 0.1 * b[:, 3], 0, h_img).astype(np.int64)
@@ -73,21 +78,50 @@ def box_histograms(image: Image, tlwh: FloatArray, step: int = 2) -> FloatArray:
     nx = np.maximum((x1 - x0 + step - 1) // step, 0)
     ny = np.maximum((y1 - y0 + step - 1) // step, 0)
     n = nx * ny  # sampled pixels per box
+    hist = np.zeros((k, BINS))
     total = int(n.sum())
     if total == 0:
-        return np.zeros((k, BINS))
-    box = np.repeat(np.arange(k), n)
-    off = np.arange(total) - np.repeat(np.cumsum(n) - n, n)  # index within its box
-    nxr = np.maximum(np.repeat(nx, n), 1)
-    ys = np.repeat(y0, n) + step * (off // nxr)
-    xs = np.repeat(x0, n) + step * (off % nxr)
-    hsv = cv2.cvtColor(image[ys, xs].reshape(1, -1, 3), cv2.COLOR_BGR2HSV)[0].astype(np.int64)
-    chroma = hsv[:, 1] >= MIN_SATURATION
-    hue_bin = (hsv[:, 0] * HUES // 180) * SATS + hsv[:, 1] * SATS // 256
-    grey_bin = HUES * SATS + hsv[:, 2] * GREYS // 256
-    bins = np.where(chroma, hue_bin, grey_bin)
-    hist = np.bincount(box * BINS + bins, minlength=k * BINS).reshape(k, BINS).astype(float)
-    return hist / np.maximum(hist.sum(axis=1, keepdims=True), 1.0)
+        return hist
+    pixels = np.empty((1, total, 3), np.uint8)
+    sample_pixels(np.ascontiguousarray(image), x0, x1, y0, y1, step, pixels[0])
+    count_bins(cv2.cvtColor(pixels, cv2.COLOR_BGR2HSV)[0], n, hist)
+    return hist
+
+
+@kernel
+def sample_pixels(image: Image, x0: IntArray, x1: IntArray, y0: IntArray, y1: IntArray,
+                  step: int, out: Image) -> None:
+    """The pixels ``image[y, x]`` of every box ``b`` at ``y`` in ``range(y0[b], y1[b], step)``
+    and ``x`` in ``range(x0[b], x1[b], step)``, box after box, row after row, into ``out``
+    (the total, 3)."""
+    j = 0
+    for b in range(x0.size):
+        for y in range(y0[b], y1[b], step):
+            for x in range(x0[b], x1[b], step):
+                for c in range(3):
+                    out[j, c] = image[y, x, c]
+                j += 1
+
+
+@kernel
+def count_bins(hsv: Image, n: IntArray, hist: FloatArray) -> None:
+    """Each box's ``n[b]`` pixels of ``hsv`` (OpenCV's 8-bit HSV, box after box) counted into
+    its row of ``hist`` (zeros), normalised to a sum of 1: a pixel with saturation
+    ≥ :data:`MIN_SATURATION` into one of :data:`HUES` × :data:`SATS` bins, a grey one into one
+    of :data:`GREYS` brightnesses."""
+    j = 0
+    for b in range(n.size):
+        for _ in range(n[b]):
+            h, s, v = int(hsv[j, 0]), int(hsv[j, 1]), int(hsv[j, 2])
+            if s >= MIN_SATURATION:
+                hist[b, (h * HUES // 180) * SATS + s * SATS // 256] += 1.0
+            else:
+                hist[b, HUES * SATS + v * GREYS // 256] += 1.0
+            j += 1
+        if n[b] > 0:
+            total = float(n[b])
+            for i in range(BINS):
+                hist[b, i] /= total
 
 
 class Relinker:
