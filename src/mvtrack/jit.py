@@ -45,6 +45,7 @@ KERNEL_MODULES = (
     "association/assign.py",
     "tracking/lifecycle.py",
     "tracking/step.py",
+    "detection/background.py",
     "detection/colourbg.py",
     "detection/wings.py",
     "detection/ncc.py",

@@ -5,10 +5,16 @@ plain-Python function, bit for bit."""
 from __future__ import annotations
 
 import cv2
+import numba
 import numpy as np
 import pytest
 
-from mvtrack.detection.colourbg import ColourBackground, background_spread, shadow_cells
+from mvtrack.detection.colourbg import (
+    ColourBackground,
+    background_spread,
+    grey_at,
+    shadow_cells,
+)
 
 
 def _reference(img, mu8, mu_hi, mu_grey_pad, mu_spread, fg, step, lo, hi, chroma, texture,
@@ -99,12 +105,9 @@ PARAMS = (0.2, 0.95, 0.03, 2.0, 3.0, 0.8)
 def test_shadow_cells_equal_the_array_statement(step: int, seed: int) -> None:
     frame, mu8, mu_hi, mu_grey, mu_grey_pad, mu_spread, fg = _scene(seed)
     want = _reference(frame, mu8, mu_hi, mu_grey_pad, mu_spread, fg, step, *PARAMS)
-    grey = cv2.copyMakeBorder(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
-                              cv2.BORDER_REPLICATE)
-    pts = cv2.findNonZero(fg[::step, ::step]).reshape(-1, 2)
     for fn in (shadow_cells, shadow_cells.py_func):
         got = fg.copy()
-        fn(frame, mu8, mu_hi, grey, mu_grey, mu_grey_pad, got, pts, step, *PARAMS)
+        fn(frame, mu8, mu_hi, mu_grey, mu_grey_pad, got, step, *PARAMS)
         np.testing.assert_array_equal(got, want)
     # the scenes exercise every branch: shadows cleared, candidates kept, brighter pixels
     # not tested
@@ -145,3 +148,25 @@ def test_background_spread_equals_opencvs_box_filter(shape) -> None:
         got = np.array([[fn(grey, y, x) for x in range(shape[1])] for y in range(shape[0])],
                        np.float32)
         np.testing.assert_array_equal(got, want)
+
+
+def test_grey_at_is_opencvs_grey_for_every_colour() -> None:
+    """All 2²⁴ colours through the compiled function, a sample through the plain one."""
+    v = np.arange(1 << 24, dtype=np.uint32)
+    img = np.stack([v & 255, (v >> 8) & 255, v >> 16], axis=-1).astype(np.uint8)
+    img = img.reshape(4096, 4096, 3)
+    want = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+    got = _grey_image(img)
+    np.testing.assert_array_equal(got, want)
+    rng = np.random.default_rng(0)
+    for y, x in rng.integers(0, 4096, (500, 2)):
+        assert grey_at.py_func(img, int(y), int(x)) == want[y, x]
+
+
+@numba.njit
+def _grey_image(img: np.ndarray) -> np.ndarray:
+    out = np.empty(img.shape[:2], np.uint8)
+    for y in range(img.shape[0]):
+        for x in range(img.shape[1]):
+            out[y, x] = grey_at(img, y, x)
+    return out

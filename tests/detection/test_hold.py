@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.detection import make_detector
+from mvtrack.detection import background, make_detector
 from mvtrack.detection.background import box_cover
 from mvtrack.tracking import Tracker, TrackerConfig
 
@@ -75,8 +75,11 @@ def test_hold_off_gives_paper_1s_map_exactly() -> None:
     np.testing.assert_array_equal(plain.background, observed.background)
 
 
+@pytest.mark.parametrize("compiled", [True, False])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_box_cover_matches_filling_the_boxes_one_by_one(seed) -> None:
+def test_box_cover_matches_filling_the_boxes_one_by_one(seed, compiled, monkeypatch) -> None:
+    if not compiled:  # the plain function the kernel is compiled from
+        monkeypatch.setattr(background, "fill_boxes", background.fill_boxes.py_func)
     rng = np.random.default_rng(seed)
     shape = (37, 53)
     boxes = np.column_stack([rng.uniform(-10, 55, (9, 2)), rng.uniform(0.5, 20, (9, 2))])
@@ -87,9 +90,11 @@ def test_box_cover_matches_filling_the_boxes_one_by_one(seed) -> None:
         ref[y0:y1, x0:x1] = True
     np.testing.assert_array_equal(box_cover(boxes, shape), 255 * ref.astype(np.uint8))
     assert not box_cover(np.zeros((0, 4)), shape).any()
-    big = np.vstack([boxes, [[-5.0, -5.0, 60.0, 30.0]]])  # most of the image: prefix sums
+    big = np.vstack([boxes, [[-5.0, -5.0, 60.0, 30.0]]])  # most of the image, filled
     ref[:25, :55] = True
     np.testing.assert_array_equal(box_cover(big, shape), 255 * ref.astype(np.uint8))
+    many = np.vstack([big, [[-1.0, -1.0, 60.0, 40.0]] * 2])  # over twice: prefix sums
+    np.testing.assert_array_equal(box_cover(many, shape), np.full(shape, 255, np.uint8))
     assert not box_cover(np.array([[5.0, 5.0, 0.0, 3.0]]), shape).any()  # empty box
 
 

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from mvtrack.detection.base import FrontEnd, luminance
 from mvtrack.detection.blobs import BlobExtractor
+from mvtrack.jit import kernel
 from mvtrack.types import Detections, TrackFrame
 
 
@@ -198,10 +199,9 @@ class DisturbanceMap(FrontEnd):
 def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.uint8]:
     """The pixels of an image of ``shape`` (H, W) inside any of the boxes ``tlwh`` (K, 4), as
     a 0/255 mask. A box covers the pixels from ``floor(left)`` to ``ceil(left + width) - 1``,
-    the same for rows. No loop over the boxes: the flat indices of all their pixels at once
-    (each row of a box a run from its first pixel) when
-    they cover little of the image; else each box adds ±1 at its four corners of a
-    difference image, whose 2-D prefix sum (``cv2.integral``) counts the boxes over each
+    the same for rows. The boxes are filled in one compiled pass (:func:`fill_boxes`) when
+    their pixels number at most twice the image's; else each box adds ±1 at its four corners
+    of a difference image, whose 2-D prefix sum (``cv2.integral``) counts the boxes over each
     pixel."""
     h, w = shape[0], shape[1]
     b = np.asarray(tlwh, np.float64).reshape(-1, 4)
@@ -209,16 +209,9 @@ def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.u
     np.minimum(np.maximum(ends, 0.0, out=ends), (w, h, w, h), out=ends)
     x0, y0, x1, y1 = ends.astype(np.intp).T
     bw, bh = np.maximum(x1 - x0, 0), np.maximum(y1 - y0, 0)
-    n = bw * bh  # pixels per box
-    total = int(n.sum())
-    if total <= h * w // 8:  # small boxes: write their pixels, row by row of each box
+    if int((bw * bh).sum()) <= 2 * h * w:  # pixels of the boxes: write them
         out = np.zeros((h, w), np.uint8)
-        if total:
-            start = np.repeat(y0 * w + x0, bh)  # each row of each box: its first pixel ...
-            start += (np.arange(start.size) - np.repeat(np.cumsum(bh) - bh, bh)) * w
-            run = np.repeat(bw, bh)  # ... and its length
-            off = np.arange(total) - np.repeat(np.cumsum(run) - run, run)
-            out.reshape(-1)[np.repeat(start, run) + off] = 255
+        fill_boxes(out, x0, y0, x1, y1)
         return out
     corners = np.concatenate([y0 * (w + 1) + x0, y0 * (w + 1) + x1, y1 * (w + 1) + x0,
                               y1 * (w + 1) + x1])
@@ -226,6 +219,17 @@ def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.u
     diff = np.bincount(corners, sign, minlength=(h + 1) * (w + 1)).astype(np.float32)
     count = cv2.integral(diff.reshape(h + 1, w + 1), sdepth=cv2.CV_32F)[1 : h + 1, 1 : w + 1]
     return cv2.compare(count, 0.5, cv2.CMP_GT)
+
+
+@kernel
+def fill_boxes(out: NDArray[np.uint8], x0: NDArray[np.intp], y0: NDArray[np.intp],
+               x1: NDArray[np.intp], y1: NDArray[np.intp]) -> None:
+    """Set ``out[y0[k]:y1[k], x0[k]:x1[k]]`` to 255 for every box ``k`` (ends within the
+    image)."""
+    for k in range(x0.size):
+        for y in range(y0[k], y1[k]):
+            for x in range(x0[k], x1[k]):
+                out[y, x] = 255
 
 
 class FrameDifference(FrontEnd):

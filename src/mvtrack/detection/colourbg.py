@@ -315,16 +315,10 @@ class ColourBackground:
         """Shadow pixels of ``fg`` set to 0: the test of the module docstring on the
         foreground pixels not brighter than the background's neighbourhood in any channel
         (a shadow is darker in every channel), one compiled pass (:func:`shadow_cells`)."""
-        step = self.shadow_step
-        pts = cv2.findNonZero(fg[::step, ::step])  # the pixels tested, (x, y) / step
-        if pts is None:
-            return
-        grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
-                                  cv2.BORDER_REPLICATE)
         lo, hi = self.shadow_ratio
-        shadow_cells(img, self._mu8, self._hi, grey, self._mu_grey, self._mu_grey_pad, fg,
-                     pts.reshape(-1, 2), step, lo, hi, self.shadow_chroma,
-                     self.shadow_texture, self.shadow_min_texture, self.shadow_correlation)
+        shadow_cells(img, self._mu8, self._hi, self._mu_grey, self._mu_grey_pad, fg,
+                     self.shadow_step, lo, hi, self.shadow_chroma, self.shadow_texture,
+                     self.shadow_min_texture, self.shadow_correlation)
 
     def _remove_ghosts(self, img: Image, fg: Image) -> None:
         """Ghost blobs of ``fg`` reset to the frame and cleared: the test of
@@ -452,17 +446,25 @@ def background_spread(grey: Image, y: int, x: int) -> np.float32:
 
 
 @kernel
+def grey_at(img: Image, y: int, x: int) -> np.uint8:
+    r"""The grey level of BGR pixel ``(y, x)`` as ``cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)``
+    gives it: :math:`(3735 B + 19235 G + 9798 R + 2^{14}) \gg 15` (OpenCV's 8-bit weights
+    of 0.114, 0.587, 0.299 in 15-bit fixed point, rounded; tested on every colour)."""
+    v = (np.int64(img[y, x, 0]) * 3735 + np.int64(img[y, x, 1]) * 19235
+         + np.int64(img[y, x, 2]) * 9798 + 16384) >> 15
+    return np.uint8(v)
+
+
+@kernel
 def shadow_cells(
-    img: Image, mu8: Image, mu_hi: Image, grey_pad: Image, mu_grey: Image, mu_grey_pad: Image,
-    fg: Image, pts: NDArray[np.int32], step: int,
-    lo: float, hi: float, chroma: float, texture: float, min_texture: float,
+    img: Image, mu8: Image, mu_hi: Image, mu_grey: Image, mu_grey_pad: Image, fg: Image,
+    step: int, lo: float, hi: float, chroma: float, texture: float, min_texture: float,
     correlation: float,
 ) -> None:
     r"""Clear the shadow cells of ``fg`` (in place): the shadow test of the module docstring
-    on the candidates among the pixels ``pts`` (``(x, y)`` in units of ``step`` px: every
-    ``step``-th foreground pixel along each row and column). A candidate is a foreground
-    pixel darker in every channel: not above the neighbourhood maximum ``mu_hi`` of the
-    background (:math:`\hat\mu` of eq. (1)) in any.
+    on the candidates among every ``step``-th foreground pixel along each row and column.
+    A candidate is a foreground pixel darker in every channel: not above the neighbourhood
+    maximum ``mu_hi`` of the background (:math:`\hat\mu` of eq. (1)) in any.
 
     For a candidate with frame colour :math:`f` and background colour :math:`m` (grey levels
     plus one, so that black has a colour) and brightnesses :math:`L_f = \sum_c f_c`,
@@ -478,10 +480,11 @@ def shadow_cells(
       of the frame's and the background's grey levels over the window above ``correlation``.
 
     A tested pixel that is a shadow clears the candidates of its ``step`` × ``step`` cell
-    (itself at the top left). The window statistics are summed in ``float32`` in row order,
-    as NumPy sums the nine offsets; ``grey_pad`` and ``mu_grey_pad`` are the frame's and the
-    background's grey levels padded by one pixel (replicated border), ``mu_grey`` the
-    background's unpadded.
+    (itself at the top left); the cells do not overlap, so the order of the tests does not
+    matter. The window statistics are summed in ``float32`` in row order, as NumPy sums the
+    nine offsets. The frame's grey levels are computed at the window's pixels
+    (:func:`grey_at`, the image's border replicated); ``mu_grey`` is the background's grey
+    image and ``mu_grey_pad`` the same padded by one pixel (replicated border).
     """
     h, w = fg.shape
     ninth = np.float32(9.0)
@@ -489,52 +492,55 @@ def shadow_cells(
     tiny = np.float32(1e-3)
     min_texture32 = np.float32(min_texture)
     correlation32 = np.float32(correlation)
-    for k in range(pts.shape[0]):
-        x, y = pts[k, 0] * step, pts[k, 1] * step
-        if not _darker(img, mu_hi, y, x):
-            continue
-        f0, f1, f2 = np.int64(img[y, x, 0]) + 1, np.int64(img[y, x, 1]) + 1, np.int64(
-            img[y, x, 2]) + 1
-        m0, m1, m2 = np.int64(mu8[y, x, 0]) + 1, np.int64(mu8[y, x, 1]) + 1, np.int64(
-            mu8[y, x, 2]) + 1
-        lf, lm = f0 + f1 + f2, m0 + m1 + m2
-        if not (lf >= lo * lm and lf <= hi * lm):  # the brightness ratio
-            continue
-        cross = abs(f0 * lm - m0 * lf) + abs(f1 * lm - m1 * lf) + abs(f2 * lm - m2 * lf)
-        shadow = cross < chroma * np.float64(lf * lm)  # the colour kept
-        spread = background_spread(mu_grey, y, x)
-        sa, saa = zero, zero  # the frame's 3×3 window: sum and sum of squares
-        for dy in range(3):
-            for dx in range(3):
-                va = np.float32(grey_pad[y + dy, x + dx])
-                sa += va
-                saa += va * va
-        ma = sa / ninth
-        var_a = saa / ninth - ma * ma
-        var_a = var_a if var_a > zero else zero
-        if shadow:  # ... and no texture of its own
-            s_f = np.float32(math.sqrt(var_a))
-            shadow = np.float64(s_f) <= (lf / lm) * np.float64(spread) + texture
-        if not shadow and spread > min_texture32:  # the background's texture kept
-            sb, sbb, sab = zero, zero, zero
+    window = np.empty(9, np.float32)  # the frame's grey levels over the 3×3 window
+    for y in range(0, h, step):
+        for x in range(0, w, step):
+            if fg[y, x] == 0 or not _darker(img, mu_hi, y, x):
+                continue
+            f0, f1, f2 = np.int64(img[y, x, 0]) + 1, np.int64(img[y, x, 1]) + 1, np.int64(
+                img[y, x, 2]) + 1
+            m0, m1, m2 = np.int64(mu8[y, x, 0]) + 1, np.int64(mu8[y, x, 1]) + 1, np.int64(
+                mu8[y, x, 2]) + 1
+            lf, lm = f0 + f1 + f2, m0 + m1 + m2
+            if not (lf >= lo * lm and lf <= hi * lm):  # the brightness ratio
+                continue
+            cross = abs(f0 * lm - m0 * lf) + abs(f1 * lm - m1 * lf) + abs(f2 * lm - m2 * lf)
+            shadow = cross < chroma * np.float64(lf * lm)  # the colour kept
+            spread = background_spread(mu_grey, y, x)
+            sa, saa = zero, zero  # the frame's 3×3 window: sum and sum of squares
             for dy in range(3):
+                yy = min(max(y + dy - 1, 0), h - 1)
                 for dx in range(3):
-                    va = np.float32(grey_pad[y + dy, x + dx])
-                    vb = np.float32(mu_grey_pad[y + dy, x + dx])
-                    sb += vb
-                    sbb += vb * vb
-                    sab += va * vb
-            mb = sb / ninth
-            var_b = sbb / ninth - mb * mb
-            var_b = var_b if var_b > zero else zero
-            cov = sab / ninth - ma * mb
-            rho = cov / np.float32(math.sqrt(var_a * var_b + tiny))
-            shadow = rho > correlation32
-        if shadow:  # the cell of the tested pixel, where it holds candidates
-            for yy in range(y, min(y + step, h)):
-                for xx in range(x, min(x + step, w)):
-                    if fg[yy, xx] != 0 and _darker(img, mu_hi, yy, xx):
-                        fg[yy, xx] = 0
+                    va = np.float32(grey_at(img, yy, min(max(x + dx - 1, 0), w - 1)))
+                    window[3 * dy + dx] = va
+                    sa += va
+                    saa += va * va
+            ma = sa / ninth
+            var_a = saa / ninth - ma * ma
+            var_a = var_a if var_a > zero else zero
+            if shadow:  # ... and no texture of its own
+                s_f = np.float32(math.sqrt(var_a))
+                shadow = np.float64(s_f) <= (lf / lm) * np.float64(spread) + texture
+            if not shadow and spread > min_texture32:  # the background's texture kept
+                sb, sbb, sab = zero, zero, zero
+                for dy in range(3):
+                    for dx in range(3):
+                        va = window[3 * dy + dx]
+                        vb = np.float32(mu_grey_pad[y + dy, x + dx])
+                        sb += vb
+                        sbb += vb * vb
+                        sab += va * vb
+                mb = sb / ninth
+                var_b = sbb / ninth - mb * mb
+                var_b = var_b if var_b > zero else zero
+                cov = sab / ninth - ma * mb
+                rho = cov / np.float32(math.sqrt(var_a * var_b + tiny))
+                shadow = rho > correlation32
+            if shadow:  # the cell of the tested pixel, where it holds candidates
+                for yy in range(y, min(y + step, h)):
+                    for xx in range(x, min(x + step, w)):
+                        if fg[yy, xx] != 0 and _darker(img, mu_hi, yy, xx):
+                            fg[yy, xx] = 0
 
 
 def _bgr(frame: Image) -> Image:
