@@ -49,6 +49,7 @@ KERNEL_MODULES = (
     "detection/colourbg.py",
     "detection/wings.py",
     "detection/ncc.py",
+    "detection/splitmerge.py",
     "detection/kinds.py",
     "video/relink.py",
 )

@@ -295,3 +295,25 @@ def test_mvtrack_track_with_the_hog_detector_boxes_the_people_of_kitti17(
     # HOG's boxes are the detector's loose windows (KITTI-17 precision about 0.5 at IoU 0.5);
     # the disturbance map, starting cold on these frames, matches next to none
     assert hits >= 10 and hits >= 0.3 * len(rows), (hits, len(rows))
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_box_overlaps_are_numpys_broadcast_statement(compiled: bool) -> None:
+    """The compiled intersection areas (and the plain function) equal the broadcast NumPy
+    statement bit for bit, NaN boxes included."""
+    from mvtrack.detection import splitmerge
+
+    fn = splitmerge.overlap_areas if compiled else splitmerge.overlap_areas.py_func
+    rng = np.random.default_rng(5)
+    a = np.column_stack([rng.uniform(-20, 80, (40, 2)), rng.uniform(0, 30, (40, 2))])
+    b = np.column_stack([rng.uniform(-20, 80, (25, 2)), rng.uniform(0, 30, (25, 2))])
+    a[3, 1] = np.nan
+    b[7, 2] = np.nan
+    lo = np.maximum(a[:, None, :2], b[None, :, :2])
+    hi = np.minimum(a[:, None, :2] + a[:, None, 2:], b[None, :, :2] + b[None, :, 2:])
+    want = np.clip(hi - lo, 0.0, None).prod(axis=2)
+    got = np.empty((40, 25))
+    fn(a, b, got)
+    np.testing.assert_array_equal(got, want)
+    assert np.isnan(got[3]).all() and np.isnan(got[:, 7]).all() and (got == 0).any()
+    assert (got > 0).sum() > 20

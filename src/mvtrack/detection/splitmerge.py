@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.detection.sizeprior import SizePrior
+from mvtrack.jit import kernel
 
 FloatArray = NDArray[np.float64]
 
@@ -53,9 +54,31 @@ HEADS = 0.8
 
 def _overlap(a: FloatArray, b: FloatArray) -> FloatArray:
     """(M, N) intersection areas of boxes ``a`` (M, 4) and ``b`` (N, 4), tlwh."""
-    lo = np.maximum(a[:, None, :2], b[None, :, :2])
-    hi = np.minimum(a[:, None, :2] + a[:, None, 2:], b[None, :, :2] + b[None, :, 2:])
-    return np.clip(hi - lo, 0.0, None).prod(axis=2)
+    a = np.ascontiguousarray(a, np.float64).reshape(-1, 4)
+    b = np.ascontiguousarray(b, np.float64).reshape(-1, 4)
+    out = np.empty((a.shape[0], b.shape[0]))
+    overlap_areas(a, b, out)
+    return out
+
+
+@kernel
+def overlap_areas(a: FloatArray, b: FloatArray, out: FloatArray) -> None:
+    """``out[i, j]``: the intersection area of boxes ``a[i]`` and ``b[j]`` (tlwh), the
+    product of the overlaps along x and y, each ``min(right) − max(left)`` clipped at 0 (NaN
+    in, NaN out, as NumPy's ``maximum``, ``minimum`` and ``clip``)."""
+    for i in range(a.shape[0]):
+        for j in range(b.shape[0]):
+            area = 1.0
+            for c in range(2):
+                lo_a, lo_b = a[i, c], b[j, c]
+                hi_a, hi_b = lo_a + a[i, c + 2], lo_b + b[j, c + 2]
+                lo = lo_a if (lo_a > lo_b or lo_a != lo_a) else lo_b
+                hi = hi_a if (hi_a < hi_b or hi_a != hi_a) else hi_b
+                d = hi - lo
+                if d < 0.0:
+                    d = 0.0
+                area = d if c == 0 else area * d
+            out[i, j] = area
 
 
 def merge_fragments(
