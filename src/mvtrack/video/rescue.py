@@ -358,23 +358,39 @@ def search_radii(tracker: Any, uids: Any, default: float, gates: Any = None) -> 
     ``gates``: the tracker's gates when the caller has them already.
     """
     uids = np.asarray(uids, np.int64).reshape(-1)
-    out = np.full(uids.size, float(default))
     if gates is None and (uids.size == 0 or not hasattr(tracker, "gates")):
-        return out
+        return np.full(uids.size, float(default))
+    return lookup_radii(radius_table(tracker.gates() if gates is None else gates), uids,
+                        default)
+
+
+def radius_table(gates: Any) -> tuple[IntArray, FloatArray]:
+    """The uids of the tracker's gates (sorted, stable) and each gate's semi-major axis in px
+    (:func:`search_radii`; NaN where the gate is not a finite region)."""
     from mvtrack.viz.annotate import gate_ellipses
 
-    g = tracker.gates() if gates is None else gates
-    if len(g) == 0 or uids.size == 0:
-        return out
-    order = np.argsort(g.uid, kind="stable")
-    pos = np.minimum(np.searchsorted(g.uid[order], uids), len(g) - 1)
-    row = order[pos]
-    known = g.uid[row] == uids
-    shape = g.shape[row]
-    ok = known & np.isfinite(shape.reshape(-1, 4)).all(axis=1) & math.isfinite(g.r2)
+    if len(gates) == 0:
+        return _NO_UIDS, _NO_VALUES
+    order = np.argsort(gates.uid, kind="stable")
+    shape = gates.shape[order]
+    radius = np.full(order.size, np.nan)
+    ok = np.isfinite(shape.reshape(-1, 4)).all(axis=1) & math.isfinite(gates.r2)
     if ok.any():
-        axes, _ = gate_ellipses(shape[ok], g.r2)
-        out[ok] = axes[:, 0]
+        radius[ok] = gate_ellipses(shape[ok], gates.r2)[0][:, 0]
+    return np.asarray(gates.uid, np.int64)[order], radius
+
+
+def lookup_radii(table: tuple[IntArray, FloatArray], uids: IntArray, default: float
+                 ) -> FloatArray:
+    """The radius of each of ``uids`` in a :func:`radius_table`; ``default`` where it has no
+    finite one."""
+    known, radius = table
+    out = np.full(uids.size, float(default))
+    if known.size == 0 or uids.size == 0:
+        return out
+    pos = np.minimum(np.searchsorted(known, uids), known.size - 1)
+    hit = (known[pos] == uids) & np.isfinite(radius[pos])
+    out[hit] = radius[pos[hit]]
     return out
 
 
@@ -433,8 +449,8 @@ class TemplateRescuer:
         self.max_radius = None if max_radius is None else float(max_radius)
         self.held_scores: HeldScores = NO_SCORES
         self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
-        # the tracker's gates, read once per state of the tracker (the searches before its
-        # step and inside it see the same one): (its track table, the gates)
+        # the radii of the tracker's gates, read once per state of the tracker (the searches
+        # before its step and inside it see the same one): (its track table, radius_table)
         self._gates: tuple[Any, Any] | None = None
 
     def attach(self, tracker: Any) -> None:
@@ -442,15 +458,18 @@ class TemplateRescuer:
         self.tracker = tracker
         self.bank.clear()
 
-    def radii(self, uids: Any, gates: Any = None) -> FloatArray:
+    def radii(self, uids: Any, table: tuple[IntArray, FloatArray] | None = None
+              ) -> FloatArray:
         """The search radius in px of each track ``uids``: ``gate_radius`` if given, else its
-        gate's (:func:`search_radii`; ``gates``: the tracker's, when known); at most
-        ``max_radius``."""
+        gate's (:func:`search_radii`; ``table``: the tracker's gates as a
+        :func:`radius_table`, when known); at most ``max_radius``."""
         uids = np.asarray(uids, np.int64).reshape(-1)
         if self._radius is not None:
             r = np.full(uids.size, self._radius)
+        elif table is not None:
+            r = lookup_radii(table, uids, self.bank.gate_radius)
         else:
-            r = search_radii(self.tracker, uids, self.bank.gate_radius, gates)
+            r = search_radii(self.tracker, uids, self.bank.gate_radius)
         return r if self.max_radius is None else np.minimum(r, self.max_radius)
 
     def search(self, frame: Image) -> RescueFn:
@@ -465,15 +484,16 @@ class TemplateRescuer:
 
         return search
 
-    def _gates_now(self) -> Any:
-        """The tracker's gates for its next step (None: not needed, or no gates); computed
-        once per state of the tracker (a step replaces its track table)."""
+    def _gates_now(self) -> tuple[IntArray, FloatArray] | None:
+        """The radii of the tracker's gates for its next step, a :func:`radius_table` (None:
+        not needed, or no gates); computed once per state of the tracker (a step replaces its
+        track table)."""
         tracker = self.tracker
         if self._radius is not None or not hasattr(tracker, "gates"):
             return None
         table = getattr(tracker, "tracks", None)
         if self._gates is None or self._gates[0] is not table or table is None:
-            self._gates = (table, tracker.gates())
+            self._gates = (table, radius_table(tracker.gates()))
         return self._gates[1]
 
     def callback(self, frame: Image) -> RescueFn:
