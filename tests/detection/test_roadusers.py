@@ -740,3 +740,45 @@ def test_labelling_the_band_of_foreground_rows_equals_labelling_the_image(thread
             np.testing.assert_array_equal(stats, expected_stats)
     finally:
         cv2.setNumThreads(old)
+
+
+class _BandSizes:
+    """A stand-in kind model: the smallest kind's size where a band stands, per band."""
+
+    ready = True
+
+    def __init__(self, sizes: np.ndarray) -> None:
+        self.sizes = sizes
+
+    def expected(self, probe: np.ndarray) -> np.ndarray:
+        assert len(probe) == len(self.sizes)
+        return self.sizes[:, None, :].astype(np.float64)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_the_banded_closing_is_each_bands_closing_of_the_whole_mask(seed: int) -> None:
+    """Each band of rows is closed with its kind's ellipse as if the whole mask were closed
+    with it; neighbouring bands of one size are closed together (the same pixels)."""
+    rng = np.random.default_rng(seed)
+    h, w = int(rng.integers(40, 120)), int(rng.integers(30, 90))
+    mask = np.zeros((h, w), np.uint8)
+    for _ in range(int(rng.integers(3, 15))):
+        y, x = rng.integers(0, h), rng.integers(0, w)
+        mask[y : y + rng.integers(1, 12), x : x + rng.integers(1, 12)] = 255
+    mask[rng.random((h, w)) < 0.03] = 255
+    det = RoadUserDetector(close_bands=6)
+    det._shape = (h, w)
+    sizes = rng.choice([1.0, 3.0, 5.0, 7.0], size=(6, 2))
+    if seed % 2:
+        sizes[2:5] = sizes[2]  # a run of bands of one size
+    sizes[0] = 1.0  # a band left as it is
+    det.kinds = _BandSizes(sizes / det.close_frac)
+    got = det._closing(mask)
+    edges = np.linspace(0, h, 7).round().astype(int)
+    for b in range(6):
+        kw, kh = (int(v) | 1 for v in np.round(sizes[b]))
+        y0, y1 = edges[b], edges[b + 1]
+        kern = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kw, kh))
+        want = mask if kw <= 1 and kh <= 1 else cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kern)
+        np.testing.assert_array_equal(got[y0:y1], want[y0:y1])
+    assert (got != mask).any()

@@ -356,12 +356,18 @@ class RoadUserDetector:
         size = kinds.expected(probe)[:, 0, :] * self.scale * self.close_frac
         ksize = np.clip(np.round(size).astype(int) | 1, 1, max(h, w) // 4 | 1)
         out = np.zeros_like(mask)
-        for b in range(n):  # a few bands of rows, not objects
+        b = 0
+        while b < n:  # a few bands of rows, not objects; neighbours of one size at once
             kw, kh = int(ksize[b, 0]), int(ksize[b, 1])
-            y0, y1 = int(edges[b]), int(edges[b + 1])
+            e = b + 1
+            while e < n and ksize[e, 0] == kw and ksize[e, 1] == kh:
+                e += 1
+            y0, y1 = int(edges[b]), int(edges[e])
+            b = e
             if kw <= 1 and kh <= 1:
                 out[y0:y1] = mask[y0:y1]
                 continue
+            # a closing reaches 2 (kh // 2) <= kh rows: the rows around the band decide it
             a0, a1 = max(y0 - kh, 0), min(y1 + kh, h)
             kern = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kw, kh))
             closed = morph_around(mask[a0:a1], cv2.MORPH_CLOSE, kern)
