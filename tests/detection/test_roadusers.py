@@ -491,17 +491,75 @@ def test_one_box_per_object_against_truth_matching() -> None:
     assert (iou[0] > 0.1).sum() == 2  # the second box on object 0 counts as a split
 
 
-def test_sparse_sobel_equals_opencvs() -> None:
-    """The ghost test's gradient at the outline pixels only equals ``cv2.Sobel`` there."""
-    import cv2
+@pytest.mark.parametrize("compiled", [True, False])
+def test_sparse_sobel_equals_opencvs(compiled: bool) -> None:
+    """The ghost test's derivatives at the outline pixels only equal ``cv2.Sobel`` of the
+    grey image there, borders included, exactly."""
+    from mvtrack.detection.colourbg import sobel_at
 
-    from mvtrack.detection.colourbg import _edges, _sobel_at
+    fn = sobel_at if compiled else sobel_at.py_func
+    img = np.random.default_rng(4).integers(0, 256, (30, 40, 3), dtype=np.uint8)
+    g = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+    ys, xs = (v.astype(np.intp).reshape(-1) for v in np.indices((30, 40)))
+    gx, gy = fn(img, ys, xs)
+    np.testing.assert_array_equal(
+        gx, cv2.Sobel(g, cv2.CV_64F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE).ravel())
+    np.testing.assert_array_equal(
+        gy, cv2.Sobel(g, cv2.CV_64F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE).ravel())
 
-    g = np.random.default_rng(4).integers(0, 256, (30, 40), dtype=np.uint8)
-    pad = cv2.copyMakeBorder(g, 1, 1, 1, 1, cv2.BORDER_REPLICATE)
-    idx = np.arange(30 * 40)
-    got = _sobel_at(pad, idx + (idx // 40) * 2 + 42 + 1, 42)
-    np.testing.assert_allclose(got, _edges(g).reshape(-1), rtol=1e-5, atol=1e-3)
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_ghost_test_on_the_still_foregrounds_box_equals_it_on_the_whole_image(
+        threads: int, monkeypatch) -> None:
+    """Reset pixels, model and busy counts as when every step of the ghost test runs over
+    the whole image: ghosts (blobs with the background's edges) and objects, near the
+    borders and far from them, labels touching in the outline, one thread or two."""
+    from mvtrack.detection import colourbg
+
+    rng = np.random.default_rng(threads)
+    old = cv2.getNumThreads()
+    cv2.setNumThreads(threads)
+    try:
+        resets = 0
+        for trial in range(40):
+            h, w = int(rng.integers(20, 80)), int(rng.integers(20, 80))
+            bg = rng.integers(60, 200, (h, w, 3), dtype=np.uint8)
+            bg = cv2.GaussianBlur(bg, (0, 0), 2.0)
+            frame = bg.copy()
+            fg = np.zeros((h, w), np.uint8)
+            for _ in range(int(rng.integers(1, 7))):
+                y, x = int(rng.integers(-3, h)), int(rng.integers(-3, w))
+                hh, ww = int(rng.integers(2, 15)), int(rng.integers(2, 15))
+                ys, xs = slice(max(y, 0), y + hh), slice(max(x, 0), x + ww)
+                fg[ys, xs] = 255
+                if rng.random() < 0.5:  # an object with edges of its own
+                    frame[ys, xs] = rng.integers(0, 256, 3, dtype=np.uint8)
+                else:  # a ghost: the background had an object there, the frame has not
+                    bg[ys, xs] = rng.integers(0, 256, 3, dtype=np.uint8)
+            if trial % 5 == 0:
+                fg[:] = 0
+            results = []
+            for whole in (False, True):
+                if whole:
+                    monkeypatch.setattr(colourbg, "ghost_window",
+                                        lambda m: (0, m.shape[0], 0, m.shape[1]))
+                model = ColourBackground(ghost_every=2, refresh=1)
+                model.bootstrap(bg)
+                model._run[:] = 10
+                model._refresh()
+                out = fg.copy()
+                model._remove_ghosts(frame, out)
+                results.append((out, model.mean.copy(), model._run.copy(), model._stale))
+                monkeypatch.undo()
+            (a, ma, ra, sa), (b, mb, rb, sb) = results
+            np.testing.assert_array_equal(a, b)
+            np.testing.assert_array_equal(ma, mb)
+            np.testing.assert_array_equal(ra, rb)
+            assert sa == sb
+            resets += int((a != fg).any())
+        assert 5 <= resets < 40  # ghosts reset in some scenes, not in all
+    finally:
+        cv2.setNumThreads(old)
 
 
 def test_ghost_of_the_first_frames_is_reset() -> None:

@@ -305,8 +305,6 @@ class Gate:
 
     def regions(self, uid: IntArray, track_id: IntArray) -> GateRegions:
         """The regions to draw (the position part: the size term only narrows them)."""
-        c = self.cov
-        shape = np.stack([np.stack([c[:, 0], c[:, 1]], -1), np.stack([c[:, 1], c[:, 2]], -1)],
-                         -2)
+        shape = self.cov[:, [0, 1, 1, 2]].reshape(-1, 2, 2)  # [[xx, xy], [xy, yy]]
         return GateRegions(np.asarray(uid).copy(), np.asarray(track_id).copy(),
                            np.array(self.view.xy), shape, self.threshold)

@@ -332,16 +332,21 @@ class ColourBackground:
         ghost stays where it is, and an object that moves is never reset into the
         background, however textured the background behind it (a walker in front of a row
         of bicycles)."""
+        out = fg
         still = cv2.compare(self._run, float(max(self.ghost_every - self.refresh, 1)),
                             cv2.CMP_GE)
         fg_still = cv2.bitwise_and(fg, still)
+        win = ghost_window(fg_still)
+        if win is None:
+            return
+        y0, y1, x0, x1 = win  # the still foreground with its outline and ring, and no more
+        fg = fg_still[y0:y1, x0:x1]
         try:  # 16-bit labels (dilated as they are) unless there are more than 65535 blobs
-            n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_16U)
+            n, labels = cv2.connectedComponents(fg, connectivity=8, ltype=cv2.CV_16U)
         except cv2.error:
-            n, labels = cv2.connectedComponents(fg_still, connectivity=8, ltype=cv2.CV_32S)
+            n, labels = cv2.connectedComponents(fg, connectivity=8, ltype=cv2.CV_32S)
         if n <= 1:
             return
-        out, fg = fg, fg_still
         # the outline as a band across the blob's border (the neighbourhood test of eq. (1)
         # leaves a blob a pixel inside the object's edge), labelled by the nearest blob
         outline = cv2.subtract(cv2.dilate(fg, None), cv2.erode(fg, None))
@@ -352,16 +357,12 @@ class ColourBackground:
         pts = cv2.findNonZero(outline)
         if pts is None:
             return
-        w = fg.shape[1]
-        pts = pts.reshape(-1, 2)
-        idx = pts[:, 1].astype(np.intp) * w + pts[:, 0]
-        grey = cv2.copyMakeBorder(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1, 1, 1, 1,
-                                  cv2.BORDER_REPLICATE)
-        e_frame = _sobel_at(grey, idx + (idx // w) * 2 + (w + 2) + 1, w + 2)
+        pts = pts.reshape(-1, 2).astype(np.intp)
+        e_frame = np.hypot(*sobel_at(img, pts[:, 1] + y0, pts[:, 0] + x0))
         if self._mu_edges is None:  # the background's of the last refresh
             self._mu_edges = _edges(cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY))
-        e_back = self._mu_edges.reshape(-1)[idx]
-        lab = labels.reshape(-1)[idx]
+        e_back = self._mu_edges[pts[:, 1] + y0, pts[:, 0] + x0]
+        lab = labels[pts[:, 1], pts[:, 0]]
         s_frame = np.bincount(lab, e_frame, minlength=n)
         s_back = np.bincount(lab, e_back, minlength=n)
         ghost = (s_back > GHOST_RATIO * s_frame).astype(np.uint8) * np.uint8(255)
@@ -375,9 +376,12 @@ class ColourBackground:
             on = ghost[labels]
         sel = cv2.bitwise_and(on, fg)
         # reset to the frame with the ring the neighbourhood test left out of the blob
-        cv2.accumulateWeighted(img, self.mean, 1.0, mask=cv2.dilate(sel, None))
+        mean = self.mean[y0:y1, x0:x1]
+        cv2.accumulateWeighted(img[y0:y1, x0:x1], mean, 1.0, mask=cv2.dilate(sel, None))
+        out = out[y0:y1, x0:x1]
         cv2.bitwise_and(out, cv2.bitwise_not(sel), dst=out)
-        cv2.bitwise_and(self._run, 0.0, dst=self._run, mask=sel)
+        run = self._run[y0:y1, x0:x1]
+        cv2.bitwise_and(run, 0.0, dst=run, mask=sel)
         self._stale = True
 
     def rescale(self, size: tuple[int, int]) -> None:
@@ -392,15 +396,39 @@ class ColourBackground:
         self.mean, self.var, self._run = mean, var, run
 
 
-def _sobel_at(grey_pad: Image, at: NDArray[np.intp], stride: int) -> NDArray[np.float64]:
-    """The 3×3 Sobel gradient magnitude of a grey image padded by one pixel (row length
-    ``stride``) at the flat indices ``at`` only (as :func:`cv2.Sobel` with ``ksize=3``)."""
-    g = grey_pad.reshape(-1)  # gathered first, then made floats: the points, not the image
-    p = {(dy, dx): g[at + dy * stride + dx].astype(np.float64) for dy in (-1, 0, 1)
-         for dx in (-1, 0, 1) if (dy, dx) != (0, 0)}
-    gx = (p[-1, 1] + 2 * p[0, 1] + p[1, 1]) - (p[-1, -1] + 2 * p[0, -1] + p[1, -1])
-    gy = (p[1, -1] + 2 * p[1, 0] + p[1, 1]) - (p[-1, -1] + 2 * p[-1, 0] + p[-1, 1])
-    return np.hypot(gx, gy)
+def ghost_window(fg_still: Image) -> tuple[int, int, int, int] | None:
+    """Rows ``y0:y1`` and columns ``x0:x1`` of the image the ghost test works on: the
+    box of the still foreground widened by 2 px (its outline reaches 1 px beyond it, and the
+    outline's labels and the reset ring 1 px more), from an even row and column (the
+    labeller numbers blobs by 2×2 blocks, so the numbering is the whole image's); None
+    without still foreground."""
+    x, y, bw, bh = cv2.boundingRect(fg_still)
+    if bw == 0:
+        return None
+    h, w = fg_still.shape
+    x0, y0 = max(x - 2, 0), max(y - 2, 0)
+    return y0 - y0 % 2, min(y + bh + 2, h), x0 - x0 % 2, min(x + bw + 2, w)
+
+
+@kernel
+def sobel_at(img: Image, ys: NDArray[np.intp], xs: NDArray[np.intp]
+             ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The 3×3 Sobel derivatives ``(g_x, g_y)`` of the grey levels of BGR ``img``
+    (:func:`grey_at`) at the pixels ``(ys, xs)`` only, the border replicated (as
+    :func:`cv2.Sobel` with ``ksize=3`` of ``cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)``; whole
+    numbers, exact)."""
+    h, w = img.shape[:2]
+    gx = np.empty(ys.size)
+    gy = np.empty(ys.size)
+    p = np.empty((3, 3))
+    for k in range(ys.size):
+        for dy in range(3):
+            yy = min(max(ys[k] + dy - 1, 0), h - 1)
+            for dx in range(3):
+                p[dy, dx] = np.float64(grey_at(img, yy, min(max(xs[k] + dx - 1, 0), w - 1)))
+        gx[k] = (p[0, 2] + 2 * p[1, 2] + p[2, 2]) - (p[0, 0] + 2 * p[1, 0] + p[2, 0])
+        gy[k] = (p[2, 0] + 2 * p[2, 1] + p[2, 2]) - (p[0, 0] + 2 * p[0, 1] + p[0, 2])
+    return gx, gy
 
 
 def _edges(grey: Image) -> NDArray[np.float32]:
