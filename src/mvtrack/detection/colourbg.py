@@ -242,8 +242,6 @@ class ColourBackground:
         noise = cv2.convertScaleAbs(cv2.sqrt(self.var), alpha=self.k_sigma)  # λ σ
         floor = cv2.LUT(_channel_max(self._mu8), self._floor_table)
         self._thr = cv2.min(cv2.max(noise, floor), 254.0)
-        # the background's edges, for the ghost test: made when a test first needs them
-        self._mu_edges: NDArray[np.float32] | None = None
         if self.shadows:  # the grey background, padded by one pixel, for shadows
             self._mu_grey = cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY)
             self._mu_grey_pad = cv2.copyMakeBorder(self._mu_grey, 1, 1, 1, 1,
@@ -323,9 +321,10 @@ class ColourBackground:
     def _remove_ghosts(self, img: Image, fg: Image) -> None:
         """Ghost blobs of ``fg`` reset to the frame and cleared: the test of
         :func:`~mvtrack.detection.ghosts.ghost_blobs` (the outline's edges are the
-        background's, not the frame's), with the background's edges kept from the last
-        refresh and the frame's computed on the outline pixels only, over a band two pixels
-        wide across each blob's border.
+        background's, not the frame's), the gradients of the background of the last refresh
+        and of the frame computed on the outline pixels only (:func:`sobel_at`, exact), over
+        a band two pixels wide across each blob's border, inside the box of the still
+        foreground (:func:`ghost_window`).
 
         Only foreground that stood still since the previous test is looked at (pixels busy
         for ``ghost_every`` frames in a row, as the count of the last refresh tells): a
@@ -359,9 +358,7 @@ class ColourBackground:
             return
         pts = pts.reshape(-1, 2).astype(np.intp)
         e_frame = np.hypot(*sobel_at(img, pts[:, 1] + y0, pts[:, 0] + x0))
-        if self._mu_edges is None:  # the background's of the last refresh
-            self._mu_edges = _edges(cv2.cvtColor(self._mu8, cv2.COLOR_BGR2GRAY))
-        e_back = self._mu_edges[pts[:, 1] + y0, pts[:, 0] + x0]
+        e_back = np.hypot(*sobel_at(self._mu8, pts[:, 1] + y0, pts[:, 0] + x0))
         lab = labels[pts[:, 1], pts[:, 0]]
         s_frame = np.bincount(lab, e_frame, minlength=n)
         s_back = np.bincount(lab, e_back, minlength=n)
@@ -429,13 +426,6 @@ def sobel_at(img: Image, ys: NDArray[np.intp], xs: NDArray[np.intp]
         gx[k] = (p[0, 2] + 2 * p[1, 2] + p[2, 2]) - (p[0, 0] + 2 * p[1, 0] + p[2, 0])
         gy[k] = (p[2, 0] + 2 * p[2, 1] + p[2, 2]) - (p[0, 0] + 2 * p[0, 1] + p[0, 2])
     return gx, gy
-
-
-def _edges(grey: Image) -> NDArray[np.float32]:
-    """Sobel gradient magnitude (3×3) of a grey image, replicated border."""
-    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    return cv2.magnitude(gx, gy)
 
 
 @kernel
