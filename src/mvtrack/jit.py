@@ -51,6 +51,7 @@ KERNEL_MODULES = (
     "detection/ncc.py",
     "detection/splitmerge.py",
     "detection/kinds.py",
+    "detection/labelling.py",
     "video/relink.py",
 )
 

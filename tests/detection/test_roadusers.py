@@ -12,7 +12,7 @@ from scipy.optimize import linear_sum_assignment
 from mvtrack.detection import kinds, make_detector
 from mvtrack.detection.colourbg import ColourBackground
 from mvtrack.detection.kinds import KindModel, robust_plane
-from mvtrack.detection.roadusers import RoadUserDetector, _label, _label_all, morph_around
+from mvtrack.detection.roadusers import RoadUserDetector, morph_around
 from mvtrack.detection.waists import cut_at_waists, join_fragments
 from mvtrack.eval import iou_matrix
 from mvtrack.sim.dense import scene_from_dense
@@ -772,32 +772,6 @@ def test_the_clusterings_sums_are_numpys_to_the_bit(compiled: bool) -> None:
         lloyd(points, weight, centres, labels, 20)
         assert np.array_equal(labels, ref_l)
         assert np.array_equal(centres, ref_c)
-
-
-@pytest.mark.parametrize("threads", [1, 2])
-def test_labelling_the_band_of_foreground_rows_equals_labelling_the_image(threads: int) -> None:
-    """Labels and statistics (the background's too) as over every row: foreground in a band,
-    at the top or bottom edge, filling whole rows, none at all; one thread or two."""
-    rng = np.random.default_rng(threads)
-    old = cv2.getNumThreads()
-    cv2.setNumThreads(threads)
-    try:
-        for k in range(300):
-            mask = np.zeros((int(rng.integers(1, 70)), int(rng.integers(1, 70))), np.uint8)
-            mask[rng.random(mask.shape) < rng.uniform(0.0, 0.8)] = 255
-            if k % 2:
-                mask[: rng.integers(0, mask.shape[0] + 1)] = 0
-            if k % 3 == 0:
-                mask[rng.integers(0, mask.shape[0] + 1) :] = 0
-            if k % 5 == 0:
-                mask[rng.integers(0, mask.shape[0]) :] = 255
-            labels, stats = _label(mask)
-            expected_labels, expected_stats = _label_all(mask)
-            assert labels.dtype == expected_labels.dtype
-            np.testing.assert_array_equal(labels, expected_labels)
-            np.testing.assert_array_equal(stats, expected_stats)
-    finally:
-        cv2.setNumThreads(old)
 
 
 class _BandSizes:

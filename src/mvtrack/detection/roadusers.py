@@ -41,6 +41,7 @@ from mvtrack.detection.adaptive import temporal_median
 from mvtrack.detection.background import box_cover
 from mvtrack.detection.colourbg import ColourBackground
 from mvtrack.detection.kinds import KindModel
+from mvtrack.detection.labelling import label_blobs
 from mvtrack.detection.splitmerge import (
     MERGED,
     PLAIN,
@@ -376,7 +377,7 @@ class RoadUserDetector:
 
     def _objects(self, mask: Image) -> tuple[FloatArray, NDArray[np.int8], FloatArray]:
         """Object boxes (working pixels), their flags and foreground areas (steps 3–5)."""
-        labels, stats = _label(mask)
+        labels, stats = label_blobs(mask)
         ids = np.flatnonzero(stats[:, cv2.CC_STAT_AREA] >= self.min_area)
         ids = ids[ids > 0]
         boxes, src, area = cut_flat_wings(labels, ids, stats, self.wings)
@@ -499,39 +500,3 @@ def morph_around(mask: Image, op: int, kernel: Image) -> Image:
     y0, y1 = max(y - kh, 0), min(y + bh + kh, h)
     out[y0:y1, x0:x1] = cv2.morphologyEx(mask[y0:y1, x0:x1], op, kernel)
     return out
-
-
-def _label(mask: Image) -> tuple[NDArray[np.integer], NDArray[np.int32]]:
-    """8-connected labels and statistics of ``mask`` (OpenCV's BBDT labeller, 16-bit labels
-    unless there are more than 65535 blobs: less memory traffic, the same result).
-
-    Only the band of rows that holds foreground is scanned, from an even row: the labeller
-    numbers the blobs in the order of their first 2×2 block, which rows of background
-    before and after the band do not change (nor the threads' stripes, which are joined in
-    that order), so the labels and the blobs' statistics are those of the whole image; the
-    background's statistics (label 0) are completed with the rows left out."""
-    h, w = mask.shape
-    _, y, _, bh = cv2.boundingRect(mask)
-    y0, y1 = y - y % 2, y + bh
-    if bh == 0 or (y0 == 0 and y1 == h):
-        return _label_all(mask)
-    band, stats = _label_all(mask[y0:y1])
-    labels = np.zeros((h, w), band.dtype)
-    labels[y0:y1] = band
-    stats[1:, cv2.CC_STAT_TOP] += y0
-    _, b_top, _, b_height, b_area = (int(v) for v in stats[0])  # the band's background
-    top = 0 if y0 > 0 else (b_top if b_area else y1)
-    bottom = h - 1 if y1 < h else (y0 + b_top + b_height - 1 if b_area else y0 - 1)
-    stats[0] = (0, top, w, bottom - top + 1, b_area + w * (h - (y1 - y0)))
-    return labels, stats
-
-
-def _label_all(mask: Image) -> tuple[NDArray[np.integer], NDArray[np.int32]]:
-    """:func:`_label` over every row of ``mask``."""
-    try:
-        _, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
-            mask, 8, cv2.CV_16U, cv2.CCL_BBDT)
-    except cv2.error:  # more than 65535 blobs
-        _, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(
-            mask, 8, cv2.CV_32S, cv2.CCL_BBDT)
-    return labels, stats
