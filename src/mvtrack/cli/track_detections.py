@@ -78,7 +78,8 @@ def register(app: typer.Typer) -> None:
             bool,
             typer.Option(
                 "--interpolate/--no-interpolate",
-                help="Write the frames a track bridged without detection, interpolated.",
+                help="Write the frames a track bridged without detection, interpolated (between "
+                "ends each detected in the frame next to them too).",
             ),
         ] = True,
         score_scale: Annotated[

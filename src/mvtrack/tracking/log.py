@@ -232,14 +232,24 @@ def backfill(frames: list[TrackFrame], uids: list[NDArray[np.int64]]) -> list[Tr
     return out
 
 
+#: frames within which each end of a gap must have another measurement of its track, on
+#: the side away from the gap, for the gap to be interpolated (:func:`interpolate_gaps`);
+#: chosen by leave-one-out over the frame-rate sweep's sequences (``docs/bench/framerate.md``)
+END_REACH = 2
+
+
 def interpolate_gaps(frames: list[TrackFrame]) -> list[TrackFrame]:
     """Fill the gaps of every track by linear interpolation between its measured rows.
 
     Offline post-processing (the linear interpolation of ByteTrack's and other offline
     MOTChallenge trackers). A row is *anchored* when it carries a measurement (a detection,
-    or a template match in the ``STOPPED`` state). Between two anchored rows ``a`` and ``b``
-    of the same track, every frame ``k`` gets a row — the coasting row the tracker wrote, or
-    a new one — re-estimated from them, with ``t = (k - k_a) / (k_b - k_a)``:
+    or a template match in the ``STOPPED`` state). A gap is filled between two anchored rows
+    ``a`` and ``b`` of the same track when each end is confirmed by another measurement of the
+    track on its outer side, at most :data:`END_REACH` frames before ``k_a`` and after
+    ``k_b``. A lone measurement at either end may be a false alarm or another object the
+    track took for a frame; interpolated towards it, the gap's rows lie on nobody. Every
+    frame ``k`` of a filled gap gets a row — the coasting row the tracker wrote, or a new
+    one — re-estimated from its ends, with ``t = (k - k_a) / (k_b - k_a)``:
 
     ``x_k = (1 - t) x_a + t x_b``,  ``wh_k = (1 - t) wh_a + t wh_b``,
     ``v_k = (x_b - x_a) / (k_b - k_a)``
@@ -267,7 +277,14 @@ def interpolate_gaps(frames: list[TrackFrame]) -> list[TrackFrame]:
     rows = np.flatnonzero(anchored & (tid > 0))
     rows = rows[np.lexsort((frame_of[rows], tid[rows]))]  # by track, then frame
     a, b = rows[:-1], rows[1:]
-    gap = (tid[a] == tid[b]) & (frame_of[b] - frame_of[a] > 1)
+    same = tid[a] == tid[b]
+    dk = frame_of[b] - frame_of[a]
+    # each end confirmed by another measurement of its track at most END_REACH frames away
+    # on its outer side: before the gap's first row, after its last
+    near = same & (dk <= END_REACH)
+    before = np.concatenate([[False], near])  # row i has a measurement just before it
+    after = np.concatenate([near, [False]])  # ... and just after it
+    gap = same & (dk > 1) & before[:-1] & after[1:]
     a, b = a[gap], b[gap]
     if a.size == 0:
         return list(frames)
