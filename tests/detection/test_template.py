@@ -395,11 +395,11 @@ def test_search_reads_the_gates_once_per_state_of_the_tracker() -> None:
     rescuer.search(frame)(uids, xy, wh)
     rescuer.callback(frame)(uids, xy, wh)
     assert len(calls) == 1
-    before = rescuer.radii(uids, rescuer._gates_now())
+    before = rescuer.radii(uids)
     tracker.step(Detections(10, np.zeros((0, 2)), np.zeros((0, 2))))  # both missed
     rescuer.search(frame)(uids, xy, wh)
     assert len(calls) == 2
-    after = rescuer.radii(uids, rescuer._gates_now())
+    after = rescuer.radii(uids)
     np.testing.assert_allclose(after, search_radii(tracker, uids, 20.0))
     assert (after > before).all()  # a missed track's gate opens
 

@@ -343,7 +343,7 @@ class StoppedVehicleRescuer:
         self._standing = standing_uids(self.tracker, tracks)
 
 
-def search_radii(tracker: Any, uids: Any, default: float, gates: Any = None) -> FloatArray:
+def search_radii(tracker: Any, uids: Any, default: float) -> FloatArray:
     """The search radius in px of each track ``uids`` (internal uids): the semi-major axis of
     its gate region.
 
@@ -355,13 +355,11 @@ def search_radii(tracker: Any, uids: Any, default: float, gates: Any = None) -> 
     with the box and with the time a track has gone without detection. ``default`` (the
     bank's ``gate_radius``) where the tracker has no gates, where the gate is not a region
     about the prediction (``iou``, ``coupled-literal``) or where ``uids`` holds no live track.
-    ``gates``: the tracker's gates when the caller has them already.
     """
     uids = np.asarray(uids, np.int64).reshape(-1)
-    if gates is None and (uids.size == 0 or not hasattr(tracker, "gates")):
+    if uids.size == 0 or not hasattr(tracker, "gates"):
         return np.full(uids.size, float(default))
-    return lookup_radii(radius_table(tracker.gates() if gates is None else gates), uids,
-                        default)
+    return lookup_radii(radius_table(tracker.gates()), uids, default)
 
 
 def radius_table(gates: Any) -> tuple[IntArray, FloatArray]:
@@ -451,25 +449,25 @@ class TemplateRescuer:
         self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
         # the radii of the tracker's gates, read once per state of the tracker (the searches
         # before its step and inside it see the same one): (its track table, radius_table)
-        self._gates: tuple[Any, Any] | None = None
+        self._radii: tuple[Any, Any] | None = None
 
     def attach(self, tracker: Any) -> None:
         """Use ``tracker`` (and forget templates of any previous one)."""
         self.tracker = tracker
         self.bank.clear()
 
-    def radii(self, uids: Any, table: tuple[IntArray, FloatArray] | None = None
-              ) -> FloatArray:
+    def radii(self, uids: Any) -> FloatArray:
         """The search radius in px of each track ``uids``: ``gate_radius`` if given, else its
-        gate's (:func:`search_radii`; ``table``: the tracker's gates as a
-        :func:`radius_table`, when known); at most ``max_radius``."""
+        gate's (:func:`search_radii`, read once per state of the tracker); at most
+        ``max_radius``."""
         uids = np.asarray(uids, np.int64).reshape(-1)
+        table = self._radii_now()
         if self._radius is not None:
             r = np.full(uids.size, self._radius)
-        elif table is not None:
-            r = lookup_radii(table, uids, self.bank.gate_radius)
+        elif table is None:
+            r = np.full(uids.size, self.bank.gate_radius)
         else:
-            r = search_radii(self.tracker, uids, self.bank.gate_radius)
+            r = lookup_radii(table, uids, self.bank.gate_radius)
         return r if self.max_radius is None else np.minimum(r, self.max_radius)
 
     def search(self, frame: Image) -> RescueFn:
@@ -480,11 +478,11 @@ class TemplateRescuer:
         bank = self.bank
 
         def search(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any, Any]:
-            return bank.rescue(frame, uids, predicted_xy, wh, self.radii(uids, self._gates_now()))
+            return bank.rescue(frame, uids, predicted_xy, wh, self.radii(uids))
 
         return search
 
-    def _gates_now(self) -> tuple[IntArray, FloatArray] | None:
+    def _radii_now(self) -> tuple[IntArray, FloatArray] | None:
         """The radii of the tracker's gates for its next step, a :func:`radius_table` (None:
         not needed, or no gates); computed once per state of the tracker (a step replaces its
         track table)."""
@@ -492,9 +490,9 @@ class TemplateRescuer:
         if self._radius is not None or not hasattr(tracker, "gates"):
             return None
         table = getattr(tracker, "tracks", None)
-        if self._gates is None or self._gates[0] is not table or table is None:
-            self._gates = (table, radius_table(tracker.gates()))
-        return self._gates[1]
+        if self._radii is None or self._radii[0] is not table or table is None:
+            self._radii = (table, radius_table(tracker.gates()))
+        return self._radii[1]
 
     def callback(self, frame: Image) -> RescueFn:
         """The ``rescue`` argument of ``tracker.step`` for ``frame``; the NCC scores of the
