@@ -29,6 +29,9 @@ Usage::
 
     python benchmarks/bench_framerate.py --peers-python /work/peers/bin/python \\
         --out docs/bench/framerate.md --json benchmarks/data/framerate.json
+    git worktree add /tmp/previous e15da75   # the engine before the rewrite
+    python benchmarks/bench_framerate.py --peers-python /work/peers/bin/python \\
+        --previous-src /tmp/previous --previous-label " (e15da75)" --out ... --json ...
     python benchmarks/bench_framerate.py --rules --out docs/bench/rules.md
     python benchmarks/bench_framerate.py --loo --out docs/bench/defaults.md
 """
@@ -37,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -124,6 +128,18 @@ def run_peers(python: str, cell: dict[str, Any]) -> dict[str, dict[str, float]]:
             for r in rows if "iou" in r.get("accuracy", {})}
 
 
+def run_previous(src: Path, cell: dict[str, Any]) -> dict[str, float]:
+    """An earlier mvtrack's default offline run on one cell: ``python -m mvtrack
+    track-detections`` with that checkout's ``src`` first on the path, scored here."""
+    out = cell["dir"] / "previous"
+    env = {**os.environ, "PYTHONPATH": str(src / "src")}
+    cmd = [sys.executable, "-m", "mvtrack", "track-detections", str(cell["dir"] / "det.txt"),
+           "--fps", str(cell["fps"]), "--out", str(out)]
+    subprocess.run(cmd, check=True, capture_output=True, timeout=1800, env=env)
+    (results,) = out.glob("*.txt")
+    return score(cell["dir"] / "gt.txt", results)
+
+
 def recorded_best() -> dict[tuple[str, int], dict[str, float]]:
     """The best peer per cell recorded in ``sweep-best-peers.tsv``."""
     best = {}
@@ -135,9 +151,16 @@ def recorded_best() -> dict[tuple[str, int], dict[str, float]]:
     return best
 
 
-def sweep(work: Path, python: str | None) -> dict[str, Any]:
-    """Every cell: mvtrack online and offline, the peers, the best peer per metric."""
+def sweep(work: Path, python: str | None, previous: Path | None = None,
+          previous_recorded: Path | None = None) -> dict[str, Any]:
+    """Every cell: mvtrack online and offline, the peers, the best peer per metric, and an
+    earlier version's offline run (run from its checkout ``previous``, or as recorded in the
+    JSON ``previous_recorded``)."""
     recorded = recorded_best()
+    prev_rec = {}
+    if previous_recorded is not None:
+        prev_rec = {(r["seq"], r["k"]): r["previous"]
+                    for r in json.loads(previous_recorded.read_text())["cells"]}
     result = []
     for cell in cells(work):
         row: dict[str, Any] = {"seq": cell["seq"], "k": cell["k"], "fps": cell["fps"]}
@@ -153,6 +176,10 @@ def sweep(work: Path, python: str | None) -> dict[str, Any]:
         else:
             row["best"] = recorded[(cell["seq"], cell["k"])]
             row["best_of"] = {"MOTA": "recorded", "IDF1": "recorded"}
+        if previous is not None:
+            row["previous"] = run_previous(previous, cell)
+        elif prev_rec:
+            row["previous"] = prev_rec[(cell["seq"], cell["k"])]
         result.append(row)
         print(f"{cell['seq']:15s} k={cell['k']} " + " ".join(
             f"{m} {row[m]['MOTA']:.3f}/{row[m]['IDF1']:.3f}" for m in MODES)
@@ -165,9 +192,10 @@ def means(rows: list[dict[str, Any]], key: str) -> tuple[float, float]:
             float(np.mean([r[key]["IDF1"] for r in rows])))
 
 
-def report(res: dict[str, Any], command: str) -> str:
+def report(res: dict[str, Any], command: str, previous_label: str = "") -> str:
     """The sweep as Markdown."""
     rows = res["cells"]
+    prev = all("previous" in r for r in rows)
     lines = ["## The frame-rate sweep: mvtrack beside the peers", "",
              f"Command: `{command}`", "",
              "Each development sequence with every k-th frame kept (frames renumbered, "
@@ -206,6 +234,23 @@ def report(res: dict[str, Any], command: str) -> str:
               f"offline {behind['offline']} of {len(rows)}. Mean lead over the best peer: "
               f"online {on[0] - bp[0]:+.3f} / {on[1] - bp[1]:+.3f}, offline "
               f"{off[0] - bp[0]:+.3f} / {off[1] - bp[1]:+.3f}.", ""]
+    keys = ["online", "offline", *(["previous"] if prev else []), "best"]
+    head = {"online": "online", "offline": "offline",
+            "previous": f"previous engine{previous_label}, offline", "best": "best peer"}
+    lines += ["Means over the four sequences per frame rate (MOTA / IDF1):", "",
+              "| k | " + " | ".join(head[k] for k in keys) + " |",
+              "|---:|" + "---|" * len(keys)]
+    for k in sorted({r["k"] for r in rows}):
+        sub = [r for r in rows if r["k"] == k]
+        lines.append(f"| {k} | " + " | ".join(
+            "{:.3f} / {:.3f}".format(*means(sub, key)) for key in keys) + " |")
+    lines.append("| all | " + " | ".join(
+        "{:.3f} / {:.3f}".format(*means(rows, key)) for key in keys) + " |")
+    if prev:
+        lines += ["", "Previous engine per cell (offline MOTA / IDF1): " + "; ".join(
+            f"{r['seq']} k = {r['k']} {r['previous']['MOTA']:.3f} / "
+            f"{r['previous']['IDF1']:.3f}" for r in rows) + "."]
+    lines.append("")
     return "\n".join(lines)
 
 
@@ -408,6 +453,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rules", action="store_true", help="each rule on / off instead")
     ap.add_argument("--loo", action="store_true",
                     help="leave-one-out over sequences and frame rates instead")
+    ap.add_argument("--previous-src", default=None, type=Path,
+                    help="a checkout of an earlier mvtrack: its default offline run beside "
+                    "today's on every cell")
+    ap.add_argument("--previous", default=None, type=Path,
+                    help="a JSON of an earlier --previous-src run (its figures reused)")
+    ap.add_argument("--previous-label", default="",
+                    help="how the earlier version is named in the table, e.g. ' (e15da75)'")
     ap.add_argument("--out", default=None, help="write the Markdown table here")
     ap.add_argument("--json", default=None, help="write the figures here")
     args = ap.parse_args(argv)
@@ -424,8 +476,8 @@ def main(argv: list[str] | None = None) -> int:
             res = loo(work)
             text = loo_report(res, command)
         else:
-            res = sweep(work, args.peers_python)
-            text = report(res, command)
+            res = sweep(work, args.peers_python, args.previous_src, args.previous)
+            text = report(res, command, args.previous_label)
     print(text)
     if args.out:
         Path(args.out).write_text(text)
