@@ -283,7 +283,7 @@ def variants() -> list[Variant]:
     steps: tuple[tuple[str, tuple[Any, ...]], ...] = (
         ("measurement_noise", (0.05, 0.2)),
         ("accel_noise", (0.5, 2.0)),
-        ("manoeuvre_noise", (10.0, 50.0)),
+        ("manoeuvre_noise", (10.0, 25.0)),
         ("velocity_prior", (0.75, 3.0)),
         ("size_noise", (None, 0.15, 0.4)),
         ("confirm_hits", (1, 3)),

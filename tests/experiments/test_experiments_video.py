@@ -136,7 +136,10 @@ def test_intersection_report(monkeypatch) -> None:
     pipe = v["kalman-ca, pipeline blobs"]
     assert pipe["paired_moving"]["k"] >= 16 and pipe["spurious_median"] < 10
     assert pipe["twin_frames_share"] < 0.05
-    assert v["default"]["followed_moving"]["k"] >= 17
+    # 16 of the 18 moving vehicles on seed 0: one left turn and the right turn (a 15 px arc
+    # at up to 3 px/frame, about 10 g for a car) outrun the filter; the earlier default's
+    # manoeuvring noise of 25 box sizes/s² followed the right turn on this seed (17)
+    assert v["default"]["followed_moving"]["k"] >= 16
     lo, hi = kf["followed_moving"]["ci95"]
     assert lo < 1.0 == hi
     # the rate plot: every bar has its Wilson interval

@@ -192,7 +192,7 @@ def test_settings_in_frames_and_box_sizes() -> None:
     np.testing.assert_allclose(v30 * 9, v10)
     q10, m10 = c10.accelerations(wh)
     np.testing.assert_allclose(q10, (1.0 * wh / 100) ** 2)
-    np.testing.assert_allclose(m10, (25.0 * wh / 100) ** 2)
+    np.testing.assert_allclose(m10, (15.0 * wh / 100) ** 2)
     a, b = c10.mode_switching()
     assert a == pytest.approx(1 - np.exp(-1 / 100)) and b == pytest.approx(1 - np.exp(-1 / 10))
     p = c10.life_cycle((640.0, 480.0))

@@ -123,7 +123,7 @@ class TrackerConfig:
     fps: float = 30.0
     measurement_noise: float = 0.1
     accel_noise: float = 1.0
-    manoeuvre_noise: float = 25.0
+    manoeuvre_noise: float = 15.0
     velocity_prior: float = 1.5
     size_noise: float | None = 0.25
     confirm_hits: int = 2
