@@ -204,9 +204,12 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
     }
 
     def v9_text(name: str) -> str:
+        def error(e: float | None) -> str:  # no row of the old track there: it had ended
+            return "the old track had ended" if e is None or e != e else f"prediction {e} px"
+
         b = res[name]["v9_breaks"]
         return "none" if not b else "; ".join(
-            f"f{x['frame']} ({x['where']}, prediction {x['prediction_error']} px)" for x in b)
+            f"f{x['frame']} ({x['where']}, {error(x['prediction_error'])})" for x in b)
 
     def one_track(name: str) -> str:
         tpv = res[name]["tracks_per_object"]
