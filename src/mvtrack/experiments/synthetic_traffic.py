@@ -205,7 +205,7 @@ def run(*, runs: int | None = None, seed: int = 0) -> Report:
 
     def v9_text(name: str) -> str:
         def error(e: float | None) -> str:  # no row of the old track there: it had ended
-            return "the old track had ended" if e is None or e != e else f"prediction {e} px"
+            return "the old track had ended" if e is None or np.isnan(e) else f"prediction {e} px"
 
         b = res[name]["v9_breaks"]
         return "none" if not b else "; ".join(
