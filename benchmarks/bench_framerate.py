@@ -333,9 +333,6 @@ def rules_report(res: dict[str, Any], command: str) -> str:
 
 # --------------------------------------------------------------------------- leave one out
 
-#: a default the folds' vote alone does not explain (judged where else it serves)
-KEPT_AGAINST_VOTE: dict[str, str] = {}
-
 #: how a default was settled beyond the people of the sweep
 NOTES = {
     "manoeuvre_noise": (
@@ -362,12 +359,6 @@ GRID: dict[str, tuple[Any, ...]] = {
 def _objective(runs: list[dict[str, dict[str, float]]]) -> float:
     """The mean of MOTA and IDF1, online and offline."""
     return float(np.mean([r[m][k] for r in runs for m in MODES for k in ("MOTA", "IDF1")]))
-
-
-def _held_out(runs: list[dict[str, dict[str, float]]]) -> dict[str, list[float]]:
-    """Mean MOTA and IDF1 of some cells, per mode."""
-    return {m: [float(np.mean([r[m][k] for r in runs])) for k in ("MOTA", "IDF1")]
-            for m in MODES}
 
 
 def loo(work: Path) -> dict[str, Any]:
@@ -400,7 +391,8 @@ def loo(work: Path) -> dict[str, Any]:
         label = held if key == "seq" else f"k = {held}"
         folds[label] = {"choice": choice, "held_out_choice": _objective(chosen),
                         "held_out_default": _objective(base),
-                        "means_choice": _held_out(chosen), "means_default": _held_out(base),
+                        "means_choice": {m: means(chosen, m) for m in MODES},
+                        "means_default": {m: means(base, m) for m in MODES},
                         "cells_choice": [{m: r[m] for m in MODES} for r in chosen]}
         print(label, choice, f"{folds[label]['held_out_choice']:.4f} vs default "
               f"{folds[label]['held_out_default']:.4f}", flush=True)
@@ -445,8 +437,6 @@ def loo_report(res: dict[str, Any], command: str) -> str:
                      f"{fmt(f['means_default'], f['held_out_default'])} |")
     lines += ["", f"The default scores at least as well as the fold's choice on the held-out "
               f"cells in {wins} of the {n} folds."]
-    for name, why in KEPT_AGAINST_VOTE.items():
-        lines += ["", f"**`{name}` kept at {res['default'][name]}.** {why}"]
     for name, why in NOTES.items():
         lines += ["", f"**`{name}`.** {why}"]
     return "\n".join(lines) + "\n"
