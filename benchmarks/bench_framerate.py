@@ -39,6 +39,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import shlex
@@ -100,12 +101,27 @@ def score(gt: Path, results: Any) -> dict[str, float]:
 
 def run_mvtrack(cell: dict[str, Any], changes: dict[str, Any] | None = None,
                 offline: dict[str, bool] | None = None) -> dict[str, dict[str, float]]:
-    """mvtrack online and offline on one cell, scored."""
+    """mvtrack online and offline on one cell, scored. ``changes`` are fields of
+    ``TrackerConfig`` and, named ``module.NAME``, constants of ``mvtrack.tracking.module``
+    (set for this run only)."""
+    changes = dict(changes or {})
+    constants = {k: changes.pop(k) for k in list(changes) if "." in k}
+    if constants:
+        old = {k: default_value(k) for k in constants}
+        try:
+            for k, v in constants.items():
+                module, attr = k.split(".")
+                setattr(importlib.import_module(f"mvtrack.tracking.{module}"), attr, v)
+            return run_mvtrack(cell, changes, offline)
+        finally:
+            for k, v in old.items():
+                module, attr = k.split(".")
+                setattr(importlib.import_module(f"mvtrack.tracking.{module}"), attr, v)
     from mvtrack.io.mot import MotTable, read_detections
     from mvtrack.tracking import Tracker, TrackLog, preset, track_detections
 
     frames = read_detections(cell["dir"] / "det.txt")
-    config = preset("default", fps=cell["fps"], **(changes or {}))
+    config = preset("default", fps=cell["fps"], **changes)
     tracker, log = Tracker(config), TrackLog()
     for d in frames:
         log.append(tracker.step(d))
@@ -271,6 +287,7 @@ RULES: dict[str, tuple[dict[str, Any], dict[str, bool]]] = {
     "coasting rows while certain (coast_std 0.05; off: None)": ({"coast_std": None}, {}),
     "backfill (offline)": ({}, {"backfill_rows": False}),
     "interpolation (offline)": ({}, {"interpolate": False}),
+    "relinking (offline)": ({}, {"relink": False}),
 }
 
 
@@ -353,7 +370,20 @@ GRID: dict[str, tuple[Any, ...]] = {
     "lost_std": (0.2, 0.3, 0.5),
     "birth_iou": (0.2, 0.3, 0.5),
     "confirm_score": (0.8, 1.0, 1.3),
+    "relink.SPEED_STD": (0.2, 0.4, 0.8),
+    "relink.MAX_STD": (0.5, 0.7, 1.0),
 }
+
+
+def default_value(name: str) -> Any:
+    """A setting's default: a field of ``TrackerConfig`` or, named ``module.NAME``, a constant
+    of ``mvtrack.tracking.module``."""
+    from mvtrack.tracking import TrackerConfig
+
+    if "." in name:
+        module, attr = name.split(".")
+        return getattr(importlib.import_module(f"mvtrack.tracking.{module}"), attr)
+    return getattr(TrackerConfig(), name)
 
 
 def _objective(runs: list[dict[str, dict[str, float]]]) -> float:
@@ -366,17 +396,14 @@ def loo(work: Path) -> dict[str, Any]:
     (at all its ``k``) and for each ``k`` held out (on every sequence), each setting's best
     value on the other cells (one setting at a time, the others at the default), and how the
     fold's choices together score on the held-out cells beside the default."""
-    from mvtrack.tracking import TrackerConfig
-
     cs = cells(work)
-    default = TrackerConfig()
     cache: dict[tuple[str, Any], list[dict[str, dict[str, float]]]] = {}
     for name, values in GRID.items():
         for v in values:
             cache[(name, v)] = [run_mvtrack(c, {name: v}) for c in cs]
         print(f"grid {name} done", flush=True)
     first = next(iter(GRID))
-    base_runs = cache[(first, getattr(default, first))]
+    base_runs = cache[(first, default_value(first))]
     fold_keys = [("seq", s) for s in SEQUENCES] + [("k", k) for k in KS]
     folds = {}
     for key, held in fold_keys:
@@ -402,7 +429,7 @@ def loo(work: Path) -> dict[str, Any]:
             votes[name][v] = votes[name].get(v, 0) + 1
     return {"folds": folds, "votes": {n: {str(k): c for k, c in v.items()}
                                       for n, v in votes.items()},
-            "default": {n: getattr(default, n) for n in GRID}}
+            "default": {n: default_value(n) for n in GRID}}
 
 
 def loo_report(res: dict[str, Any], command: str) -> str:

@@ -82,6 +82,14 @@ def register(app: typer.Typer) -> None:
                 "ends each detected in the frame next to them too).",
             ),
         ] = True,
+        relink: Annotated[
+            bool,
+            typer.Option(
+                "--relink/--no-relink",
+                help="Give a track that starts, alone, where an ended one was heading (within "
+                "about 1.7 s) the ended one's ID.",
+            ),
+        ] = True,
         score_scale: Annotated[
             str | None,
             typer.Option(
@@ -105,7 +113,8 @@ def register(app: typer.Typer) -> None:
         """Track the detections of DETFILE and write MOTChallenge results into --out.
 
         Offline: a confirmed track is written from its first detection (--backfill) and the
-        gaps it bridged are interpolated. Scores are ranked among those seen so far (auto).
+        gaps it bridged are interpolated; a track that starts alone where an ended one was
+        heading continues its ID (--relink). Scores are ranked among those seen so far (auto).
         These revise earlier rows, so the results file is written once, at the end (no
         streaming, unlike mvtrack track --flush); a stretch of frames without detections is
         jumped once every track has ended.
@@ -162,7 +171,8 @@ def register(app: typer.Typer) -> None:
         # Ctrl-C and SIGTERM end the run at a frame boundary; what was tracked is written
         with _signals.deferred() as stop:
             log = track_detections(stop.until(progress(frames_with_detections(frames))),
-                                   config_, backfill_rows=backfill, interpolate=interpolate)
+                                   config_, backfill_rows=backfill, interpolate=interpolate,
+                                   relink=relink)
         bar.close()
         seconds = time.perf_counter() - t0
         dest = out / results_name(detfile)
@@ -175,7 +185,8 @@ def register(app: typer.Typer) -> None:
             f"{config_.distance}, {config_.assign}, {config_.fps:g} fps; {ms:.2f} ms/frame) "
             f"-> {dest}"
         )
-        typer.echo(f"rows written: {output_policy(config_, coasting, backfill, interpolate)}")
+        policy = output_policy(config_, coasting, backfill, interpolate, relink)
+        typer.echo(f"rows written: {policy}")
         if stop.requested:
             print(f"error: {_signals.interrupt_word()} after {done} of {len(frames)} frames; "
                   f"the tracks of those frames are in {dest}", file=sys.stderr)
@@ -204,11 +215,13 @@ def parse_score_scale(text: str) -> str | tuple[float, float]:
 
 
 def output_policy(config: TrackerConfig, coasting: bool, backfill: bool = True,
-                  interpolate: bool = True) -> str:
+                  interpolate: bool = True, relink: bool = True) -> str:
     """What an offline run of ``config`` writes, in one line."""
     parts = ["confirmed tracks"]
     if backfill and not config.output_tentative:
         parts.append("from their first detection (backfill)")
+    if relink:
+        parts.append("a track that starts alone where an ended one was heading under its ID")
     if interpolate:
         parts.append("the frames they bridged interpolated")
     if coasting and config.coast_std is not None:

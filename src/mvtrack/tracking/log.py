@@ -238,7 +238,7 @@ def backfill(frames: list[TrackFrame], uids: list[NDArray[np.int64]]) -> list[Tr
 END_REACH = 2
 
 
-def interpolate_gaps(frames: list[TrackFrame]) -> list[TrackFrame]:
+def interpolate_gaps(frames: list[TrackFrame], max_gap: int | None = None) -> list[TrackFrame]:
     """Fill the gaps of every track by linear interpolation between its measured rows.
 
     Offline post-processing (the linear interpolation of ByteTrack's and other offline
@@ -261,6 +261,8 @@ def interpolate_gaps(frames: list[TrackFrame]) -> list[TrackFrame]:
     ----------
     frames : list of TrackFrame
         A run's output, in increasing frame order.
+    max_gap : int or None
+        Gaps of more frames (``k_b − k_a``) are left unfilled; None: no limit.
 
     Returns
     -------
@@ -285,6 +287,8 @@ def interpolate_gaps(frames: list[TrackFrame]) -> list[TrackFrame]:
     before = np.concatenate([[False], near])  # row i has a measurement just before it
     after = np.concatenate([near, [False]])  # ... and just after it
     gap = same & (dk > 1) & before[:-1] & after[1:]
+    if max_gap is not None:
+        gap &= dk <= max_gap
     a, b = a[gap], b[gap]
     if a.size == 0:
         return list(frames)

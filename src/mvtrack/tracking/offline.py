@@ -1,6 +1,7 @@
 """Offline tracking of a detection file: :func:`track_detections` runs a fresh
 :class:`~mvtrack.tracking.tracker.Tracker` over all frames, then writes a confirmed track
-from its first detection (backfill) and interpolates the gaps it bridged
+from its first detection (backfill), continues under its ID a track that ended and came back
+where it was heading (:mod:`mvtrack.tracking.relink`) and interpolates the gaps it bridged
 (:mod:`mvtrack.tracking.log`).
 
 These revise rows after the frame that produced them (a track's first rows get its ID only once
@@ -17,6 +18,7 @@ from numpy.typing import NDArray
 
 from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.log import TrackLog, backfill, interpolate_gaps
+from mvtrack.tracking.relink import relink as relink_tracks
 from mvtrack.tracking.tracker import RescueFn, Tracker
 from mvtrack.types import Detections, TrackFrame
 
@@ -31,6 +33,7 @@ def track_detections(
     *,
     backfill_rows: bool = True,
     interpolate: bool = True,
+    relink: bool = True,
 ) -> TrackLog:
     """Run a fresh :class:`Tracker` over ``frames`` (one :class:`Detections` per frame).
 
@@ -43,7 +46,10 @@ def track_detections(
     ``backfill_rows`` (and without ``config.output_tentative``) a confirmed track's rows start
     at its first detection (:func:`mvtrack.tracking.log.backfill`); with ``interpolate`` the
     gaps a track bridged are written in full, interpolated
-    (:func:`mvtrack.tracking.log.interpolate_gaps`).
+    (:func:`mvtrack.tracking.log.interpolate_gaps`); with ``relink`` a track that starts,
+    alone, where an ended one was heading takes the ended one's ID
+    (:func:`mvtrack.tracking.relink.relink`; gaps longer than ``config.max_misses`` frames,
+    which only relinking makes, are not interpolated).
 
     The ``"auto"`` score scale is calibrated on the scores seen so far, as online (the same
     thresholds mean the same in both modes); ``scores`` (for example every score of the file)
@@ -84,8 +90,11 @@ def track_detections(
         last = dets.frame
     if late:
         out = backfill(out, uids)
+    if relink:
+        out = relink_tracks(out, config)
     if interpolate:
-        out = interpolate_gaps(out)
+        # a gap longer than max_misses was relinked, not coasted: its rows are not guessed
+        out = interpolate_gaps(out, max_gap=config.max_misses + 1)
     log = TrackLog()
     if first is None:
         return log
