@@ -358,6 +358,10 @@ NOTES = {
         "84 of its 90 moving vehicles followed over 5 runs), KITTI-17 end to end and the "
         "US-101 clips' box F1 lose up to 0.016, while the share of track steps that jump "
         "across the road falls (US101-2: 12.5 % to 9.5 %)."),
+    "relink.SPEED_STD": (
+        "`relink.SPEED_STD` and `relink.MAX_STD` are constants of the offline relinking "
+        "(`tracking/relink.py`), not user settings; four designs of it, each judged by a "
+        "leave-one-out over a joint grid of the two, are in `docs/bench/framerate.md`."),
 }
 
 #: the principal settings and the values tried (the default among them)
