@@ -272,6 +272,7 @@ def variants() -> list[Variant]:
         Variant("no backfill (rows from confirmation on)", _changed(),
                 {"backfill_rows": False}),
         Variant("no interpolation of bridged gaps", _changed(), {"interpolate": False}),
+        Variant("no relinking of ended tracks", _changed(), {"relink": False}),
         Variant("neither (the online tracker's rows)", _changed(),
                 {"backfill_rows": False, "interpolate": False}),
         Variant("predictor kalman-cv (the IMM's steady filter alone)",
@@ -468,9 +469,9 @@ def report(res: Results, combos: list[Combo], command: str) -> str:
         "left/top/width/height "
         f"({'mean of seeds 0..' + str(res.seeds - 1) if res.seeds > 1 else 'seed 0'}). Every "
         "box has the same score, so the score settings (`score_high`, `min_score`, "
-        "`confirm_score`) change nothing here. Tracked offline (`track_detections`: backfill "
-        "and interpolation), coasting rows included, at 25 fps; MOTA and IDF1 by motmetrics "
-        "at IoU 0.5, HOTA by `mvtrack.eval` (`mvtrack.eval.metrics.evaluate`).",
+        "`confirm_score`) change nothing here. Tracked offline (`track_detections`: backfill, "
+        "relinking and interpolation), coasting rows included, at 25 fps; MOTA and IDF1 by "
+        "motmetrics at IoU 0.5, HOTA by `mvtrack.eval` (`mvtrack.eval.metrics.evaluate`).",
         "",
         "Command:",
         "",
