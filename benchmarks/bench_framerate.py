@@ -288,6 +288,7 @@ RULES: dict[str, tuple[dict[str, Any], dict[str, bool]]] = {
     "backfill (offline)": ({}, {"backfill_rows": False}),
     "interpolation (offline)": ({}, {"interpolate": False}),
     "relinking (offline)": ({}, {"relink": False}),
+    "tracks of the weakest boxes left out (offline)": ({}, {"drop_weak_tracks": False}),
 }
 
 
@@ -376,6 +377,7 @@ GRID: dict[str, tuple[Any, ...]] = {
     "confirm_score": (0.8, 1.0, 1.3),
     "relink.SPEED_STD": (0.2, 0.4, 0.8),
     "relink.MAX_STD": (0.5, 0.7, 1.0),
+    "offline.MIN_MEAN_SCORE": (0.2, 0.275, 0.35),
 }
 
 

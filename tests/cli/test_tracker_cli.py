@@ -32,7 +32,8 @@ def test_track_detections_writes_results_and_prints_a_summary(tmp_path, capsys) 
     lines = capsys.readouterr().out.strip().splitlines()
     assert len(lines) == 2 and "30 frames, 59 detections -> 2 tracks" in lines[0]
     assert lines[1].startswith(
-        "rows written: confirmed tracks, from their first detection (backfill), a track that "
+        "rows written: confirmed tracks, but those of the weakest boxes, from their first "
+        "detection (backfill), a track that "
         "starts alone where an ended one was heading under its ID, the frames they "
         "bridged interpolated, coasting rows while the prediction is within 0.05 box sizes")
     table = read_tracks(out / "seq.txt")

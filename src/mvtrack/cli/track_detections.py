@@ -90,6 +90,14 @@ def register(app: typer.Typer) -> None:
                 "about 1.7 s) the ended one's ID.",
             ),
         ] = True,
+        drop_weak: Annotated[
+            bool,
+            typer.Option(
+                "--drop-weak/--keep-weak",
+                help="Leave out a track whose detections' mean rank among the scores of all "
+                "the detections the tracks took is under 0.275.",
+            ),
+        ] = True,
         score_scale: Annotated[
             str | None,
             typer.Option(
@@ -114,7 +122,8 @@ def register(app: typer.Typer) -> None:
 
         Offline: a confirmed track is written from its first detection (--backfill) and the
         gaps it bridged are interpolated; a track that starts alone where an ended one was
-        heading continues its ID (--relink). Scores are ranked among those seen so far (auto).
+        heading continues its ID (--relink); a track of the weakest boxes is left out
+        (--drop-weak). Scores are ranked among those seen so far (auto).
         These revise earlier rows, so the results file is written once, at the end (no
         streaming, unlike mvtrack track --flush); a stretch of frames without detections is
         jumped once every track has ended.
@@ -172,7 +181,7 @@ def register(app: typer.Typer) -> None:
         with _signals.deferred() as stop:
             log = track_detections(stop.until(progress(frames_with_detections(frames))),
                                    config_, backfill_rows=backfill, interpolate=interpolate,
-                                   relink=relink)
+                                   relink=relink, drop_weak_tracks=drop_weak)
         bar.close()
         seconds = time.perf_counter() - t0
         dest = out / results_name(detfile)
@@ -185,7 +194,7 @@ def register(app: typer.Typer) -> None:
             f"{config_.distance}, {config_.assign}, {config_.fps:g} fps; {ms:.2f} ms/frame) "
             f"-> {dest}"
         )
-        policy = output_policy(config_, coasting, backfill, interpolate, relink)
+        policy = output_policy(config_, coasting, backfill, interpolate, relink, drop_weak)
         typer.echo(f"rows written: {policy}")
         if stop.requested:
             print(f"error: {_signals.interrupt_word()} after {done} of {len(frames)} frames; "
@@ -215,9 +224,12 @@ def parse_score_scale(text: str) -> str | tuple[float, float]:
 
 
 def output_policy(config: TrackerConfig, coasting: bool, backfill: bool = True,
-                  interpolate: bool = True, relink: bool = True) -> str:
+                  interpolate: bool = True, relink: bool = True, drop_weak: bool = True
+                  ) -> str:
     """What an offline run of ``config`` writes, in one line."""
     parts = ["confirmed tracks"]
+    if drop_weak:
+        parts.append("but those of the weakest boxes")
     if backfill and not config.output_tentative:
         parts.append("from their first detection (backfill)")
     if relink:

@@ -1,6 +1,7 @@
 """Offline tracking of a detection file: :func:`track_detections` runs a fresh
-:class:`~mvtrack.tracking.tracker.Tracker` over all frames, then writes a confirmed track
-from its first detection (backfill), continues under its ID a track that ended and came back
+:class:`~mvtrack.tracking.tracker.Tracker` over all frames, then leaves out the tracks made of
+the detector's weakest boxes (:func:`drop_weak`), writes a confirmed track from its first
+detection (backfill), continues under its ID a track that ended and came back
 where it was heading (:mod:`mvtrack.tracking.relink`) and interpolates the gaps it bridged
 (:mod:`mvtrack.tracking.log`).
 
@@ -17,12 +18,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.tracking.config import TrackerConfig
-from mvtrack.tracking.log import TrackLog, backfill, interpolate_gaps
+from mvtrack.tracking.log import _FIELDS, TrackLog, backfill, interpolate_gaps
 from mvtrack.tracking.relink import relink as relink_tracks
 from mvtrack.tracking.tracker import RescueFn, Tracker
 from mvtrack.types import Detections, TrackFrame
 
 IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+
+#: a track whose detections' mean calibrated score is below this is left out of an offline
+#: run's results (:func:`drop_weak`); chosen by leave-one-out over the frame-rate sweep
+#: (``docs/bench/framerate.md``)
+MIN_MEAN_SCORE = 0.275
 
 
 def track_detections(
@@ -34,6 +41,7 @@ def track_detections(
     backfill_rows: bool = True,
     interpolate: bool = True,
     relink: bool = True,
+    drop_weak_tracks: bool = True,
 ) -> TrackLog:
     """Run a fresh :class:`Tracker` over ``frames`` (one :class:`Detections` per frame).
 
@@ -49,7 +57,8 @@ def track_detections(
     (:func:`mvtrack.tracking.log.interpolate_gaps`); with ``relink`` a track that starts,
     alone, where an ended one was heading takes the ended one's ID
     (:func:`mvtrack.tracking.relink.relink`; gaps longer than ``config.max_misses`` frames,
-    which only relinking makes, are not interpolated).
+    which only relinking makes, are not interpolated); with ``drop_weak_tracks`` the tracks
+    whose detections score low on average are left out (:func:`drop_weak`).
 
     The ``"auto"`` score scale is calibrated on the scores seen so far, as online (the same
     thresholds mean the same in both modes); ``scores`` (for example every score of the file)
@@ -63,6 +72,7 @@ def track_detections(
         tracker.prime_scores(scores)
     out: list[TrackFrame] = []  # the frames with rows only
     uids: list[IntArray] = []
+    raw: list[FloatArray] = []  # each row's detection's raw score, NaN for none
     first = last = None
 
     def step(d: Detections) -> None:
@@ -70,6 +80,9 @@ def track_detections(
         if len(tf):
             out.append(tf)
             uids.append(tracker.row_uids)
+            j = tf.det_index
+            raw.append(np.where(j >= 0, d.score[np.maximum(j, 0)] if len(d) else np.nan,
+                                np.nan))
 
     for dets in frames:
         if last is None:
@@ -88,6 +101,8 @@ def track_detections(
                 f += 1
         step(dets)
         last = dets.frame
+    if drop_weak_tracks and out:
+        out, uids = drop_weak(out, uids, np.concatenate(raw))
     if late:
         out = backfill(out, uids)
     if relink:
@@ -135,3 +150,54 @@ def frames_with_detections(frames: Sequence[Detections]) -> Iterator[Detections]
         d = frames[f]
         if len(d):
             yield d
+
+
+def drop_weak(frames: list[TrackFrame], uids: list[IntArray], score: FloatArray,
+              least: float | None = None) -> tuple[list[TrackFrame], list[IntArray]]:
+    """Leave out the rows of every track whose detections score low among the tracks' own.
+
+    Each detection a track took (tentative tracks' included) is ranked among all of them,
+    ``c_j = #{s_i ≤ s_j} / n`` over the ``n`` detections taken (the ``"auto"`` calibration of
+    :mod:`mvtrack.tracking.scores`, on the boxes the tracker used), and a track is kept when
+    the mean rank of its detections, ``c̄ = (1 / m) Σ c_j``, is at least ``least``
+    (:data:`MIN_MEAN_SCORE`). A detector's weakest boxes are its false alarms and its badly
+    placed boxes: a track made mostly of them is, offline, more likely one of those than an
+    object (the online tracker must decide at confirmation; offline the whole track is
+    known). Ranks, not scores: any detector's scale, and a scene with few false alarms,
+    where the weakest boxes taken are still people, loses few tracks. A run whose scores are
+    all equal (no scores) keeps every track.
+
+    Parameters
+    ----------
+    frames, uids : list of TrackFrame, list of (K,) int64
+        A run's rows with the tracker's internal uid of each (:attr:`Tracker.row_uids`).
+    score : (R,) float
+        The raw score of each row's detection, NaN for a row without one, over the rows of
+        ``frames`` in order.
+    least : float or None
+        ``c̄`` below which a track is left out; None: :data:`MIN_MEAN_SCORE`.
+
+    Returns
+    -------
+    frames, uids
+        The rows kept (frames left without a row dropped) and their uids.
+    """
+    least = MIN_MEAN_SCORE if least is None else least
+    u = np.concatenate(uids)
+    has = ~np.isnan(score)
+    taken = np.sort(score[has])
+    rank = np.searchsorted(taken, score[has], side="right") / max(taken.size, 1)  # c_j
+    size = int(u.max()) + 1 if u.size else 0
+    total = np.bincount(u[has], weights=rank, minlength=size)
+    count = np.bincount(u[has], minlength=size)
+    strong = total >= least * count  # c̄ >= least (a track without a detection is kept)
+    out, out_u = [], []
+    for tf, uid in zip(frames, uids, strict=True):
+        keep = strong[uid]
+        if keep.all():
+            out.append(tf)
+            out_u.append(uid)
+        elif keep.any():
+            out.append(TrackFrame(tf.frame, *(getattr(tf, n)[keep] for n in _FIELDS)))
+            out_u.append(uid[keep])
+    return out, out_u
