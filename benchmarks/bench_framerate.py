@@ -363,6 +363,11 @@ NOTES = {
         "`relink.SPEED_STD` and `relink.MAX_STD` are constants of the offline relinking "
         "(`tracking/relink.py`), not user settings; four designs of it, each judged by a "
         "leave-one-out over a joint grid of the two, are in `docs/bench/framerate.md`."),
+    "offline.MIN_MEAN_SCORE": (
+        "`offline.MIN_MEAN_SCORE` leaves out the tracks of the weakest boxes in offline runs "
+        "(`tracking/offline.py: drop_weak`); the folds choose 0.275 against the other values, "
+        "but held out TUD-Stadtmitte is better without the rule at all (0.644 / 0.741 "
+        "offline against 0.634 / 0.731): `docs/bench/framerate.md`."),
 }
 
 #: the principal settings and the values tried (the default among them)
