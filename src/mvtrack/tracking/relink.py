@@ -90,18 +90,28 @@ def relink(frames: list[TrackFrame], config: TrackerConfig) -> list[TrackFrame]:
     pos = np.searchsorted(ids, np.where(public, tid, ids[0]))
     last_row = np.zeros(ids.size, np.int64)  # each track's last row of any kind
     np.maximum.at(last_row, pos[public], fr[public])
-    # the pairs: b starts after every row of a, within the longest gap bridged
-    n = fr[head][None, :] - fr[tail][:, None]
-    s = gap_variance(config, n / config.fps)
-    ok = (fr[head][None, :] > last_row[:, None]) & (s <= MAX_STD**2)
-    ia, ib = np.nonzero(ok)
+    # the pairs: b starts after every row of a, within the longest gap bridged (found by
+    # sorting the starts, so the cost follows the pairs, not the square of the tracks)
+    longest = MAX_STD**2 - 2.0 * config.measurement_noise**2
+    if longest <= 0.0:
+        return list(frames)
+    n_max = int(np.floor(np.sqrt(longest) / SPEED_STD * config.fps))  # S(n / f) <= σ_max²
+    by_start = np.argsort(fr[head], kind="stable")
+    starts = fr[head][by_start]
+    lo = np.searchsorted(starts, last_row, side="right")
+    hi = np.searchsorted(starts, fr[tail] + n_max, side="right")
+    count = np.maximum(hi - lo, 0)
+    ia = np.repeat(np.arange(ids.size), count)
+    ib = by_start[np.repeat(lo, count) + np.arange(count.sum())
+                  - np.repeat(np.cumsum(count) - count, count)]
     if ia.size == 0:
         return list(frames)
-    gap = n[ia, ib]
+    gap = fr[head[ib]] - fr[tail[ia]]
+    s = gap_variance(config, gap / config.fps)
     wh = c["wh"][tail[ia]]
     pred = c["filtered_xy"][tail[ia]] + c["velocity"][tail[ia]] * gap[:, None]  # x_a + v_a n
     res = (c["filtered_xy"][head[ib]] - pred) / wh  # box sizes
-    value = (res**2).sum(axis=1) / s[ia, ib]
+    value = (res**2).sum(axis=1) / s
     if config.size_noise is not None:
         value = value + (np.log(c["wh"][head[ib]] / wh) ** 2).sum(axis=1) / config.size_noise**2
     inside = value <= resolve_gate("mahalanobis")  # a χ² of 2 degrees of freedom, 99 %
