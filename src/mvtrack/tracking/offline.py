@@ -20,15 +20,16 @@ from numpy.typing import NDArray
 from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.log import _FIELDS, TrackLog, backfill, interpolate_gaps
 from mvtrack.tracking.relink import relink as relink_tracks
+from mvtrack.tracking.scores import ScoreCalibration
 from mvtrack.tracking.tracker import RescueFn, Tracker
 from mvtrack.types import Detections, TrackFrame
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
 
-#: a track whose detections' mean calibrated score is below this is left out of an offline
-#: run's results (:func:`drop_weak`); chosen by leave-one-out over the frame-rate sweep
-#: (``docs/bench/framerate.md``)
+#: a track whose detections' mean rank among the scores of every detection the tracks took
+#: is below this is left out of an offline run's results (:func:`drop_weak`); chosen by
+#: leave-one-out over the frame-rate sweep (``docs/bench/framerate.md``)
 MIN_MEAN_SCORE = 0.275
 
 
@@ -185,8 +186,9 @@ def drop_weak(frames: list[TrackFrame], uids: list[IntArray], score: FloatArray,
     least = MIN_MEAN_SCORE if least is None else least
     u = np.concatenate(uids)
     has = ~np.isnan(score)
-    taken = np.sort(score[has])
-    rank = np.searchsorted(taken, score[has], side="right") / max(taken.size, 1)  # c_j
+    ranks = ScoreCalibration("auto")
+    ranks.prime(score[has])
+    rank = ranks(score[has])  # c_j
     size = int(u.max()) + 1 if u.size else 0
     total = np.bincount(u[has], weights=rank, minlength=size)
     count = np.bincount(u[has], minlength=size)
