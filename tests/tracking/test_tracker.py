@@ -192,10 +192,12 @@ def _random_scene(rng: np.random.Generator, n_targets: int, n_frames: int,
 def test_backfill_changes_nothing_but_the_early_rows() -> None:
     rng = np.random.default_rng(5)
     frames = _random_scene(rng, 15, 30)
-    # without interpolation: its gaps' ends may be confirmed by the rows backfill adds
+    # without interpolation: its gaps' ends may be confirmed by the rows backfill adds;
+    # without smoothing, which revises every row
     online = track_detections(frames, TrackerConfig(), backfill_rows=False,
-                              interpolate=False).to_mot()
-    filled = track_detections(frames, TrackerConfig(), interpolate=False).to_mot()
+                              interpolate=False, smooth=False).to_mot()
+    filled = track_detections(frames, TrackerConfig(), interpolate=False,
+                              smooth=False).to_mot()
     online_rows = {tuple(r) for r in online[:, :6]}
     assert online_rows <= {tuple(r) for r in filled[:, :6]}
     first = {int(i): online[online[:, 1] == i, 0].min() for i in np.unique(online[:, 1])}

@@ -98,6 +98,14 @@ def register(app: typer.Typer) -> None:
                 "the detections the tracks took is under 0.275.",
             ),
         ] = True,
+        smooth: Annotated[
+            bool,
+            typer.Option(
+                "--smooth/--no-smooth",
+                help="Write each track's positions and boxes smoothed over all its detections "
+                "(Rauch-Tung-Striebel), not as the filter had them at each frame.",
+            ),
+        ] = True,
         score_scale: Annotated[
             str | None,
             typer.Option(
@@ -123,7 +131,8 @@ def register(app: typer.Typer) -> None:
         Offline: a confirmed track is written from its first detection (--backfill) and the
         gaps it bridged are interpolated; a track that starts alone where an ended one was
         heading continues its ID (--relink); a track of the weakest boxes is left out
-        (--drop-weak). Scores are ranked among those seen so far (auto).
+        (--drop-weak); each track's boxes are smoothed over all its detections (--smooth).
+        Scores are ranked among those seen so far (auto).
         These revise earlier rows, so the results file is written once, at the end (no
         streaming, unlike mvtrack track --flush); a stretch of frames without detections is
         jumped once every track has ended.
@@ -181,7 +190,7 @@ def register(app: typer.Typer) -> None:
         with _signals.deferred() as stop:
             log = track_detections(stop.until(progress(frames_with_detections(frames))),
                                    config_, backfill_rows=backfill, interpolate=interpolate,
-                                   relink=relink, drop_weak_tracks=drop_weak)
+                                   relink=relink, drop_weak_tracks=drop_weak, smooth=smooth)
         bar.close()
         seconds = time.perf_counter() - t0
         dest = out / results_name(detfile)
@@ -194,7 +203,8 @@ def register(app: typer.Typer) -> None:
             f"{config_.distance}, {config_.assign}, {config_.fps:g} fps; {ms:.2f} ms/frame) "
             f"-> {dest}"
         )
-        policy = output_policy(config_, coasting, backfill, interpolate, relink, drop_weak)
+        policy = output_policy(config_, coasting, backfill, interpolate, relink, drop_weak,
+                               smooth)
         typer.echo(f"rows written: {policy}")
         if stop.requested:
             print(f"error: {_signals.interrupt_word()} after {done} of {len(frames)} frames; "
@@ -224,8 +234,8 @@ def parse_score_scale(text: str) -> str | tuple[float, float]:
 
 
 def output_policy(config: TrackerConfig, coasting: bool, backfill: bool = True,
-                  interpolate: bool = True, relink: bool = True, drop_weak: bool = True
-                  ) -> str:
+                  interpolate: bool = True, relink: bool = True, drop_weak: bool = True,
+                  smooth: bool = True) -> str:
     """What an offline run of ``config`` writes, in one line."""
     parts = ["confirmed tracks"]
     if drop_weak:
@@ -236,6 +246,8 @@ def output_policy(config: TrackerConfig, coasting: bool, backfill: bool = True,
         parts.append("a track that starts alone where an ended one was heading under its ID")
     if interpolate:
         parts.append("the frames they bridged interpolated")
+    if smooth:
+        parts.append("positions and boxes smoothed over each track")
     if coasting and config.coast_std is not None:
         parts.append("coasting rows while the prediction is within "
                      f"{config.coast_std:g} box sizes")

@@ -2,8 +2,9 @@
 :class:`~mvtrack.tracking.tracker.Tracker` over all frames, then leaves out the tracks made of
 the detector's weakest boxes (:func:`drop_weak`), writes a confirmed track from its first
 detection (backfill), continues under its ID a track that ended and came back
-where it was heading (:mod:`mvtrack.tracking.relink`) and interpolates the gaps it bridged
-(:mod:`mvtrack.tracking.log`).
+where it was heading (:mod:`mvtrack.tracking.relink`), interpolates the gaps it bridged
+(:mod:`mvtrack.tracking.log`) and smooths each track over all its detections
+(:mod:`mvtrack.tracking.smooth`).
 
 These revise rows after the frame that produced them (a track's first rows get its ID only once
 it is confirmed, a gap only once it is bridged or the track ends), so the offline run writes its
@@ -21,6 +22,7 @@ from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.log import _FIELDS, TrackLog, backfill, interpolate_gaps
 from mvtrack.tracking.relink import relink as relink_tracks
 from mvtrack.tracking.scores import ScoreCalibration
+from mvtrack.tracking.smooth import smooth_tracks
 from mvtrack.tracking.tracker import RescueFn, Tracker
 from mvtrack.types import Detections, TrackFrame
 
@@ -43,6 +45,7 @@ def track_detections(
     interpolate: bool = True,
     relink: bool = True,
     drop_weak_tracks: bool = True,
+    smooth: bool = True,
 ) -> TrackLog:
     """Run a fresh :class:`Tracker` over ``frames`` (one :class:`Detections` per frame).
 
@@ -59,7 +62,9 @@ def track_detections(
     alone, where an ended one was heading takes the ended one's ID
     (:func:`mvtrack.tracking.relink.relink`; gaps longer than ``config.max_misses`` frames,
     which only relinking makes, are not interpolated); with ``drop_weak_tracks`` the tracks
-    whose detections score low on average are left out (:func:`drop_weak`).
+    whose detections score low on average are left out (:func:`drop_weak`); with ``smooth``
+    every row's position, velocity and box are the track's smoothed estimate from all its
+    detections (:func:`mvtrack.tracking.smooth.smooth_tracks`), the last step.
 
     The ``"auto"`` score scale is calibrated on the scores seen so far, as online (the same
     thresholds mean the same in both modes); ``scores`` (for example every score of the file)
@@ -74,6 +79,7 @@ def track_detections(
     out: list[TrackFrame] = []  # the frames with rows only
     uids: list[IntArray] = []
     raw: list[FloatArray] = []  # each row's detection's raw score, NaN for none
+    boxes: dict[int, FloatArray] = {}  # the detections' boxes of the frames with rows
     first = last = None
 
     def step(d: Detections) -> None:
@@ -84,6 +90,7 @@ def track_detections(
             j = tf.det_index
             raw.append(np.where(j >= 0, d.score[np.maximum(j, 0)] if len(d) else np.nan,
                                 np.nan))
+            boxes[d.frame] = d.wh
 
     for dets in frames:
         if last is None:
@@ -111,6 +118,8 @@ def track_detections(
     if interpolate:
         # a gap longer than max_misses was relinked, not coasted: its rows are not guessed
         out = interpolate_gaps(out, max_gap=config.max_misses + 1)
+    if smooth and out:
+        out = smooth_tracks(out, [_detection_boxes(f, boxes) for f in out], config)
     log = TrackLog()
     if first is None:
         return log
@@ -127,6 +136,15 @@ def track_detections(
         upto += 1
     log.skip(last + 1 - upto)
     return log
+
+
+def _detection_boxes(tf: TrackFrame, boxes: dict[int, FloatArray]) -> FloatArray:
+    """The box ``(w, h)`` of each row's detection in ``tf``, NaN for a row without."""
+    out = np.full((len(tf), 2), np.nan)
+    has = tf.det_index >= 0
+    if has.any():
+        out[has] = boxes[tf.frame][tf.det_index[has]]
+    return out
 
 
 def frames_with_detections(frames: Sequence[Detections]) -> Iterator[Detections]:

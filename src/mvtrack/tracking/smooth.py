@@ -1,0 +1,147 @@
+"""Offline smoothing of each track: the Rauch–Tung–Striebel fixed-interval smoother.
+
+Online, a row can only use the measurements up to its frame: the filtered position and the
+running box size lag behind a walker that turns, and one detection twice too wide moves the
+box for a frame or two. Offline every measurement of the track is known, so each row gets the
+smoothed estimate from all of them (Rauch, Tung & Striebel 1965), with the tracker's own noise:
+
+- **position**, per axis, a constant-velocity model in continuous time with white
+  acceleration of spectral density ``q² = (accel_noise · w)²`` (box sizes/s², ``w`` the
+  track's box along the axis) over the ``Δt`` seconds between two rows, measured with
+  ``R = (measurement_noise · w)²``:
+
+  ``F = [[1, Δt], [0, 1]]``,  ``Q = q² [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``;
+
+- **box size**, ``ln w`` and ``ln h``, a random walk of :data:`SIZE_DRIFT` per √s measured
+  with the detection's box, ``R = measurement_noise²`` (a box off by a tenth of its size).
+
+Forward (the Kalman filter), for a row ``k`` with a measurement ``z``:
+
+``x̄_k = F x_{k−1}``,  ``P̄_k = F P_{k−1} Fᵀ + Q``,  ``K = P̄_k Hᵀ (H P̄_k Hᵀ + R)⁻¹``,
+``x_k = x̄_k + K (z − H x̄_k)``,  ``P_k = (I − K H) P̄_k``;
+
+backward, from the last row of the track:
+
+``C_k = P_k Fᵀ P̄_{k+1}⁻¹``,  ``x̂_k = x_k + C_k (x̂_{k+1} − x̄_{k+1})``.
+
+The tracks are processed together, one row of every track per step (a track's ``j``-th row
+with all others' ``j``-th), so the cost is a few array operations per row of the longest
+track, whatever the number of tracks.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mvtrack.tracking.config import TrackerConfig
+from mvtrack.tracking.log import _columns, _split
+from mvtrack.types import TrackFrame
+
+FloatArray = NDArray[np.float64]
+
+#: σ_s, std of the random walk of ``ln`` box size, per √s: a walker's box changes by about
+#: a tenth of its size in a second as it nears or leaves the camera; chosen by leave-one-out
+#: over the frame-rate sweep (``docs/bench/framerate.md``)
+SIZE_DRIFT = 0.1
+
+
+def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
+                  config: TrackerConfig) -> list[TrackFrame]:
+    """Every row's position, velocity and box replaced by its track's smoothed estimate.
+
+    Parameters
+    ----------
+    frames : list of TrackFrame
+        A run's output, in increasing frame order.
+    sizes : list of (N_k, 2) float arrays
+        Each row's detection box ``(w, h)``; NaN for a row without detection.
+    config : TrackerConfig
+        ``fps``, ``measurement_noise``, ``accel_noise`` and ``velocity_prior``.
+
+    Returns
+    -------
+    list of TrackFrame
+        The same rows (IDs, states, detections and measurements unchanged) with
+        ``filtered_xy``, ``velocity`` (px/frame) and ``wh`` smoothed; rows without a
+        public ID (tentative tracks) are left as they are.
+    """
+    if not frames:
+        return []
+    c = _columns(frames)
+    uid = c["track_id"]
+    order = np.flatnonzero(uid > 0)
+    if order.size == 0:
+        return list(frames)
+    order = order[np.lexsort((c["frame"][order], uid[order]))]  # by track, then frame
+    u = uid[order]
+    starts = np.flatnonzero(np.concatenate([[True], u[1:] != u[:-1]]))
+    lengths = np.diff(np.concatenate([starts, [u.size]]))
+    by_length = np.argsort(-lengths, kind="stable")  # the tracks alive at step j: a prefix
+    starts, lengths = starts[by_length], lengths[by_length]
+    n_at = np.searchsorted(-lengths, -np.arange(int(lengths[0]) + 1), side="left")  # len > j
+
+    t = c["frame"][order] / config.fps  # seconds
+    w = c["wh"][order]  # the tracker's box: the scale of the noise
+    z = c["measured_xy"][order]
+    zs = np.log(np.concatenate(sizes)[order])
+    has_z = np.isfinite(z).all(axis=1)
+    has_s = np.isfinite(zs).all(axis=1)
+    sz, sa = config.measurement_noise, config.accel_noise
+
+    # forward: filtered (x, v, P00, P01, P11) and predicted, per row and axis; size (s, Ps)
+    shape = (u.size, 2)
+    x, v, p00, p01, p11 = (np.empty(shape) for _ in range(5))
+    xb, vb, b00, b01, b11 = (np.empty(shape) for _ in range(5))
+    s, ps, sb, psb = (np.empty(shape) for _ in range(4))
+    r = starts[: n_at[0]]
+    x[r] = np.where(has_z[r, None], z[r], c["filtered_xy"][order][r])
+    v[r] = 0.0
+    p00[r] = (sz * w[r]) ** 2
+    p01[r] = 0.0
+    p11[r] = (config.velocity_prior * w[r]) ** 2  # a new track's velocity
+    s[r] = np.where(has_s[r, None], zs[r], np.log(w[r]))
+    ps[r] = sz**2
+    for j in range(1, int(lengths[0])):
+        r = starts[: n_at[j]] + j
+        q = r - 1
+        dt = (t[r] - t[q])[:, None]
+        a2 = (sa * w[r]) ** 2
+        xb[r], vb[r] = x[q] + dt * v[q], v[q]  # x̄ = F x
+        b00[r] = p00[q] + 2 * dt * p01[q] + dt**2 * p11[q] + a2 * dt**3 / 3  # P̄ = F P Fᵀ + Q
+        b01[r] = p01[q] + dt * p11[q] + a2 * dt**2 / 2
+        b11[r] = p11[q] + a2 * dt
+        sb[r], psb[r] = s[q], ps[q] + SIZE_DRIFT**2 * dt
+        m = has_z[r, None]
+        gain = b00[r] + (sz * w[r]) ** 2  # H P̄ Hᵀ + R
+        k0, k1 = b00[r] / gain, b01[r] / gain  # K = P̄ Hᵀ / (H P̄ Hᵀ + R)
+        e = z[r] - xb[r]
+        x[r] = np.where(m, xb[r] + k0 * e, xb[r])
+        v[r] = np.where(m, vb[r] + k1 * e, vb[r])
+        p00[r] = np.where(m, b00[r] - k0 * b00[r], b00[r])  # P = (I − K H) P̄
+        p01[r] = np.where(m, b01[r] - k0 * b01[r], b01[r])
+        p11[r] = np.where(m, b11[r] - k1 * b01[r], b11[r])
+        ms = has_s[r, None]
+        g = psb[r] / (psb[r] + sz**2)
+        s[r] = np.where(ms, sb[r] + g * (zs[r] - sb[r]), sb[r])
+        ps[r] = np.where(ms, (1 - g) * psb[r], psb[r])
+
+    # backward: x̂ = x + C (x̂' − x̄'), C = P Fᵀ P̄'⁻¹ (' the next row of the track)
+    for j in range(int(lengths[0]) - 2, -1, -1):
+        r = starts[: n_at[j + 1]] + j
+        q = r + 1
+        dt = (t[q] - t[r])[:, None]
+        f00, f01 = p00[r] + dt * p01[r], p01[r]  # P Fᵀ
+        f10, f11 = p01[r] + dt * p11[r], p11[r]
+        det = b00[q] * b11[q] - b01[q] ** 2
+        i00, i01, i11 = b11[q] / det, -b01[q] / det, b00[q] / det  # P̄'⁻¹
+        ex, ev = x[q] - xb[q], v[q] - vb[q]
+        x[r] += (f00 * i00 + f01 * i01) * ex + (f00 * i01 + f01 * i11) * ev
+        v[r] += (f10 * i00 + f11 * i01) * ex + (f10 * i01 + f11 * i11) * ev
+        s[r] += ps[r] / psb[q] * (s[q] - sb[q])
+
+    c["filtered_xy"][order] = x
+    c["velocity"][order] = v / config.fps  # px/frame
+    c["wh"][order] = np.exp(s)
+    return _split(frames, c, np.ones(uid.size, bool))
+
