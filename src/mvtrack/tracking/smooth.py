@@ -75,61 +75,69 @@ def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
         return list(frames)
     order = order[np.lexsort((c["frame"][order], uid[order]))]  # by track, then frame
     u = uid[order]
-    starts = np.flatnonzero(np.concatenate([[True], u[1:] != u[:-1]]))
+    first = np.concatenate([[True], u[1:] != u[:-1]])
+    starts = np.flatnonzero(first)
     lengths = np.diff(np.concatenate([starts, [u.size]]))
-    by_length = np.argsort(-lengths, kind="stable")  # the tracks alive at step j: a prefix
-    starts, lengths = starts[by_length], lengths[by_length]
-    n_at = np.searchsorted(-lengths, -np.arange(int(lengths[0]) + 1), side="left")  # len > j
+    rank = np.empty(lengths.size, np.int64)  # the longest track first
+    rank[np.argsort(-lengths, kind="stable")] = np.arange(lengths.size)
+    track = np.cumsum(first) - 1
+    step = np.arange(u.size) - starts[track]  # each row's place in its track
+    # step-major: the j-th rows of all tracks in one slice, longest track first, so that the
+    # tracks with a j-th row are a prefix of those with a (j − 1)-th
+    order = order[np.lexsort((rank[track], step))]
+    n_at = np.bincount(step)
+    off = np.concatenate([[0], np.cumsum(n_at)])
 
     t = c["frame"][order] / config.fps  # seconds
     w = c["wh"][order]  # the tracker's box: the scale of the noise
     z = c["measured_xy"][order]
     zs = np.log(np.concatenate(sizes)[order])
-    has_z = np.isfinite(z).all(axis=1)
-    has_s = np.isfinite(zs).all(axis=1)
+    has_z = np.isfinite(z).all(axis=1)[:, None]
+    has_s = np.isfinite(zs).all(axis=1)[:, None]
     sz, sa = config.measurement_noise, config.accel_noise
 
     # forward: filtered (x, v, P00, P01, P11) and predicted, per row and axis; size (s, Ps)
-    shape = (u.size, 2)
+    shape = (order.size, 2)
     x, v, p00, p01, p11 = (np.empty(shape) for _ in range(5))
     xb, vb, b00, b01, b11 = (np.empty(shape) for _ in range(5))
     s, ps, sb, psb = (np.empty(shape) for _ in range(4))
-    r = starts[: n_at[0]]
-    x[r] = np.where(has_z[r, None], z[r], c["filtered_xy"][order][r])
+    r = slice(0, n_at[0])
+    x[r] = np.where(has_z[r], z[r], c["filtered_xy"][order][r])
     v[r] = 0.0
     p00[r] = (sz * w[r]) ** 2
     p01[r] = 0.0
     p11[r] = (config.velocity_prior * w[r]) ** 2  # a new track's velocity
-    s[r] = np.where(has_s[r, None], zs[r], np.log(w[r]))
+    s[r] = np.where(has_s[r], zs[r], np.log(w[r]))
     ps[r] = sz**2
-    for j in range(1, int(lengths[0])):
-        r = starts[: n_at[j]] + j
-        q = r - 1
+    for j in range(1, n_at.size):
+        r = slice(off[j], off[j] + n_at[j])  # this step's rows
+        q = slice(off[j - 1], off[j - 1] + n_at[j])  # the same tracks' rows before
         dt = (t[r] - t[q])[:, None]
         a2 = (sa * w[r]) ** 2
-        xb[r], vb[r] = x[q] + dt * v[q], v[q]  # x̄ = F x
+        xb[r] = x[q] + dt * v[q]  # x̄ = F x
+        vb[r] = v[q]
         b00[r] = p00[q] + 2 * dt * p01[q] + dt**2 * p11[q] + a2 * dt**3 / 3  # P̄ = F P Fᵀ + Q
         b01[r] = p01[q] + dt * p11[q] + a2 * dt**2 / 2
         b11[r] = p11[q] + a2 * dt
         sb[r], psb[r] = s[q], ps[q] + SIZE_DRIFT**2 * dt
-        m = has_z[r, None]
+        m = has_z[r]
         gain = b00[r] + (sz * w[r]) ** 2  # H P̄ Hᵀ + R
-        k0, k1 = b00[r] / gain, b01[r] / gain  # K = P̄ Hᵀ / (H P̄ Hᵀ + R)
-        e = z[r] - xb[r]
-        x[r] = np.where(m, xb[r] + k0 * e, xb[r])
-        v[r] = np.where(m, vb[r] + k1 * e, vb[r])
-        p00[r] = np.where(m, b00[r] - k0 * b00[r], b00[r])  # P = (I − K H) P̄
-        p01[r] = np.where(m, b01[r] - k0 * b01[r], b01[r])
-        p11[r] = np.where(m, b11[r] - k1 * b01[r], b11[r])
-        ms = has_s[r, None]
-        g = psb[r] / (psb[r] + sz**2)
-        s[r] = np.where(ms, sb[r] + g * (zs[r] - sb[r]), sb[r])
-        ps[r] = np.where(ms, (1 - g) * psb[r], psb[r])
+        k0 = np.where(m, b00[r] / gain, 0.0)  # K = P̄ Hᵀ / (H P̄ Hᵀ + R); 0 without z
+        k1 = np.where(m, b01[r] / gain, 0.0)
+        e = np.where(m, z[r] - xb[r], 0.0)
+        x[r] = xb[r] + k0 * e
+        v[r] = vb[r] + k1 * e
+        p00[r] = b00[r] - k0 * b00[r]  # P = (I − K H) P̄
+        p01[r] = b01[r] - k0 * b01[r]
+        p11[r] = b11[r] - k1 * b01[r]
+        g = np.where(has_s[r], psb[r] / (psb[r] + sz**2), 0.0)
+        s[r] = sb[r] + g * np.where(has_s[r], zs[r] - sb[r], 0.0)
+        ps[r] = (1 - g) * psb[r]
 
     # backward: x̂ = x + C (x̂' − x̄'), C = P Fᵀ P̄'⁻¹ (' the next row of the track)
-    for j in range(int(lengths[0]) - 2, -1, -1):
-        r = starts[: n_at[j + 1]] + j
-        q = r + 1
+    for j in range(n_at.size - 2, -1, -1):
+        r = slice(off[j], off[j] + n_at[j + 1])  # the rows with a next one
+        q = slice(off[j + 1], off[j + 1] + n_at[j + 1])
         dt = (t[q] - t[r])[:, None]
         f00, f01 = p00[r] + dt * p01[r], p01[r]  # P Fᵀ
         f10, f11 = p01[r] + dt * p11[r], p11[r]
