@@ -479,3 +479,40 @@ def test_the_compiled_step_equals_the_composition_from_python(seed: int, fps: fl
                      "predicted_xy", "wh", "velocity"):
             np.testing.assert_array_equal(getattr(ta, name), getattr(tb, name))
     np.testing.assert_array_equal(a.speed_prior, b.speed_prior)
+
+
+@pytest.mark.parametrize("fps", [5.0, 30.0])
+def test_a_rows_box_is_the_size_filters_estimate(fps: float) -> None:
+    """The box of an online row is the Kalman estimate of ``ln w``, ``ln h`` as a random
+    walk of ``SIZE_DRIFT`` per √s measured with ``measurement_noise`` (filterpy's filter on
+    the same detections), not the last detection's box."""
+    from filterpy.kalman import KalmanFilter
+
+    from mvtrack.tracking import config as config_module
+
+    rng = np.random.default_rng(4)
+    n = 12
+    wh = np.array([30.0, 70.0]) * np.exp(rng.normal(0, 0.15, (n, 2)))
+    seen = np.ones(n, bool)
+    seen[6] = False  # one missed frame: the row coasts, its size is predicted
+    config = TrackerConfig(fps=fps, coast_std=float("inf"))  # the coasting row written too
+    tracker = Tracker(config)
+    rows = {}
+    for k in range(n):
+        xy = np.array([[200.0 + 20 * k / fps, 300.0]])
+        d = Detections(k, xy, wh[k : k + 1], np.array([1.0])) if seen[k] else Detections.empty(k)
+        tf = tracker.step(d)
+        if len(tf):
+            rows[k] = tf.wh[0]
+    assert sorted(rows) == list(range(1, n))  # confirmed at the second frame, then every frame
+    r2, q2 = config.measurement_noise**2, config_module.SIZE_DRIFT**2 / fps
+    for axis in (0, 1):
+        kf = KalmanFilter(dim_x=1, dim_z=1)
+        kf.x, kf.P = np.array([np.log(wh[0, axis])]), np.array([[r2]])
+        kf.F, kf.H = np.eye(1), np.eye(1)
+        kf.Q, kf.R = np.array([[q2]]), np.array([[r2]])
+        for k in range(1, n):
+            kf.predict()
+            kf.update(np.log(wh[k, axis]) if seen[k] else None)
+            assert rows[k][axis] == pytest.approx(np.exp(kf.x[0]), rel=1e-9)
+        assert not np.allclose(rows[n - 1][axis], wh[n - 1, axis], rtol=1e-3)
