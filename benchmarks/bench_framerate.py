@@ -367,8 +367,9 @@ NOTES = {
     "offline.MIN_MEAN_SCORE": (
         "`offline.MIN_MEAN_SCORE` leaves out the tracks of the weakest boxes in offline runs "
         "(`tracking/offline.py: drop_weak`); the folds choose 0.275 against the other values, "
-        "but held out TUD-Stadtmitte is better without the rule at all (0.644 / 0.741 "
-        "offline against 0.634 / 0.731): `docs/bench/framerate.md`."),
+        "but held out TUD-Stadtmitte is better without the rule at all (0.684 / 0.762 "
+        "offline against 0.674 / 0.753 with the offline smoothing): "
+        "`docs/bench/framerate.md`."),
     "config.SIZE_DRIFT": (
         "`config.SIZE_DRIFT` is the random walk of the log box size of the rows (online) and "
         "of the offline smoother "
