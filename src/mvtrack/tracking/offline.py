@@ -78,8 +78,7 @@ def track_detections(
         tracker.prime_scores(scores)
     out: list[TrackFrame] = []  # the frames with rows only
     uids: list[IntArray] = []
-    raw: list[FloatArray] = []  # each row's detection's raw score, NaN for none
-    boxes: dict[int, FloatArray] = {}  # the detections' boxes of the frames with rows
+    seen: dict[int, Detections] = {}  # the detections of the frames with rows
     first = last = None
 
     def step(d: Detections) -> None:
@@ -87,10 +86,7 @@ def track_detections(
         if len(tf):
             out.append(tf)
             uids.append(tracker.row_uids)
-            j = tf.det_index
-            raw.append(np.where(j >= 0, d.score[np.maximum(j, 0)] if len(d) else np.nan,
-                                np.nan))
-            boxes[d.frame] = d.wh
+            seen[d.frame] = d
 
     for dets in frames:
         if last is None:
@@ -110,7 +106,8 @@ def track_detections(
         step(dets)
         last = dets.frame
     if drop_weak_tracks and out:
-        out, uids = drop_weak(out, uids, np.concatenate(raw))
+        raw = np.concatenate([_of_detection(f, seen, "score") for f in out])
+        out, uids = drop_weak(out, uids, raw)
     if late:
         out = backfill(out, uids)
     if relink:
@@ -119,7 +116,7 @@ def track_detections(
         # a gap longer than max_misses was relinked, not coasted: its rows are not guessed
         out = interpolate_gaps(out, max_gap=config.max_misses + 1)
     if smooth and out:
-        out = smooth_tracks(out, [_detection_boxes(f, boxes) for f in out], config)
+        out = smooth_tracks(out, [_of_detection(f, seen, "wh") for f in out], config)
     log = TrackLog()
     if first is None:
         return log
@@ -138,12 +135,15 @@ def track_detections(
     return log
 
 
-def _detection_boxes(tf: TrackFrame, boxes: dict[int, FloatArray]) -> FloatArray:
-    """The box ``(w, h)`` of each row's detection in ``tf``, NaN for a row without."""
-    out = np.full((len(tf), 2), np.nan)
+def _of_detection(tf: TrackFrame, seen: dict[int, Detections], field: str) -> FloatArray:
+    """``field`` (``"score"``, ``"wh"``) of each row's detection in ``tf``, NaN for a row
+    without one; ``seen`` holds the detections of the frames the rows came from."""
     has = tf.det_index >= 0
-    if has.any():
-        out[has] = boxes[tf.frame][tf.det_index[has]]
+    if not has.any():
+        return np.full((len(tf), 2) if field == "wh" else len(tf), np.nan)
+    values = getattr(seen[tf.frame], field)
+    out = np.full((len(tf), *values.shape[1:]), np.nan)
+    out[has] = values[tf.det_index[has]]
     return out
 
 
