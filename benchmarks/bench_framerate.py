@@ -370,9 +370,8 @@ NOTES = {
         "but held out TUD-Stadtmitte is better without the rule at all (0.684 / 0.762 "
         "offline against 0.674 / 0.753 with the offline smoothing): "
         "`docs/bench/framerate.md`."),
-    "config.SIZE_DRIFT": (
-        "`config.SIZE_DRIFT` is the random walk of the log box size of the rows (online) and "
-        "of the offline smoother "
+    "smooth.SIZE_DRIFT": (
+        "`smooth.SIZE_DRIFT` is the random walk of the log box size in the offline smoother "
         "(`tracking/smooth.py`), per √s; the smoother's other noise is the tracker's "
         "`measurement_noise` and `accel_noise`."),
 }
@@ -390,7 +389,7 @@ GRID: dict[str, tuple[Any, ...]] = {
     "relink.SPEED_STD": (0.2, 0.4, 0.8),
     "relink.MAX_STD": (0.5, 0.7, 1.0),
     "offline.MIN_MEAN_SCORE": (0.2, 0.275, 0.35),
-    "config.SIZE_DRIFT": (0.05, 0.1, 0.2),
+    "smooth.SIZE_DRIFT": (0.05, 0.1, 0.2),
 }
 
 

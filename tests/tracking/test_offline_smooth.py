@@ -8,7 +8,7 @@ import pytest
 from filterpy.kalman import KalmanFilter
 
 from mvtrack.tracking import TrackerConfig, track_detections
-from mvtrack.tracking import config as config_module
+from mvtrack.tracking import smooth as smooth_module
 from mvtrack.tracking.smooth import smooth_tracks
 from mvtrack.types import Detections, TrackFrame, TrackState
 
@@ -77,7 +77,7 @@ def _filterpy_size(rows: dict[int, tuple], axis: int, config: TrackerConfig) -> 
     kf.H = np.array([[1.0]])
     kf.R = np.array([[config.measurement_noise**2]])
     fs = [np.eye(1)] * len(frames)
-    qs = [np.zeros((1, 1))] + [np.array([[config_module.SIZE_DRIFT**2 * (t[k] - t[k - 1])]])
+    qs = [np.zeros((1, 1))] + [np.array([[smooth_module.SIZE_DRIFT**2 * (t[k] - t[k - 1])]])
                                for k in range(1, len(frames))]
     means, covs, _, _ = kf.batch_filter([None, *z[1:]], Fs=fs, Qs=qs)
     xs, _, _, _ = kf.rts_smoother(means, covs, Fs=fs, Qs=qs)

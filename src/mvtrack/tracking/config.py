@@ -27,11 +27,6 @@ FloatArray = NDArray[np.float64]
 #: weight of a new detection's box size in the exponential average of a track's box
 SIZE_SMOOTHING = 0.5
 
-#: σ_s, std of the random walk of a track's ``ln`` box size, per √s: the size filter of the
-#: rows' boxes (online) and of the offline smoother (:mod:`mvtrack.tracking.smooth`); chosen
-#: by leave-one-out over the frame-rate sweep (``docs/bench/framerate.md``)
-SIZE_DRIFT = 0.1
-
 #: mean time an object stays steady and manoeuvres (``kalman-imm``'s switching), seconds
 MODE_TIMES = (10.0, 1.0)
 
@@ -244,8 +239,6 @@ class TrackerConfig:
         p[lc.P_BIRTH_IOU] = math.inf if self.birth_iou is None else self.birth_iou
         p[lc.P_FPS] = self.fps
         p[lc.P_MIN_MISSES] = self.min_misses
-        p[lc.P_SIZE_Q] = SIZE_DRIFT**2 / self.fps  # σ_s² Δt over one frame
-        p[lc.P_SIZE_R] = self.measurement_noise**2  # a box off by a tenth of its size
         return p
 
     def settings(self) -> dict[str, Any]:

@@ -27,13 +27,7 @@ object, and in what the filter knows, never in seconds:
   steady one at a high rate — and at the latest after ``max_misses`` frames, or at once when
   its prediction leaves the image;
 - **rows**: a coasting track's row is written while its prediction is certain to within
-  ``coast_std`` box sizes; tentative rows only when asked (offline backfilling). A row's box
-  is the size filter's estimate: ``ln w`` and ``ln h`` as a random walk of
-  :data:`~mvtrack.tracking.config.SIZE_DRIFT` per √s, measured by each detection with the
-  variance ``measurement_noise²`` (``P̄ = P + σ_s²/fps``, ``g = P̄ / (P̄ + r²)``,
-  ``ln w ← ln w + g (ln w_d − ln w)``, ``P = (1 − g) P̄``); the gate and the noise scale
-  follow the exponential average of the detections' boxes (``wh``), which keeps up with a
-  box that changes fast;
+  ``coast_std`` box sizes; tentative rows only when asked (offline backfilling);
 - **IDs**: public IDs are handed out at confirmation, in birth order.
 
 :func:`advance` and :func:`births` are compiled kernels (:func:`mvtrack.jit.kernel`) over
@@ -61,16 +55,14 @@ STOPPED = int(TrackState.STOPPED)
 #: integer columns of the track table
 UID, TID, STATE, HITS, MISSES, AGE, LAST_K, PREV_K = range(8)
 N_INT = 8
-#: float columns: last measurement (x, y), the one before (x, y), box (w, h), score sum, and
-#: the size filter: ln w, ln h and their variance
-LAST_X, LAST_Y, PREV_X, PREV_Y, W, H, SCORE, LN_W, LN_H, LN_VAR = range(10)
-N_FLOAT = 10
+#: float columns: last measurement (x, y), the one before (x, y), box (w, h), score sum
+LAST_X, LAST_Y, PREV_X, PREV_Y, W, H, SCORE = range(7)
+N_FLOAT = 7
 
 #: life-cycle parameters as :func:`advance` reads them (:meth:`TrackerConfig.life_cycle`)
 (P_CONFIRM_HITS, P_CONFIRM_SCORE, P_MAX_MISSES, P_LOST_STD, P_COAST_STD, P_SMOOTHING,
- P_TENTATIVE_ROWS, P_FRAME_W, P_FRAME_H, P_BIRTH_IOU, P_FPS, P_MIN_MISSES, P_SIZE_Q,
- P_SIZE_R) = range(14)
-N_PARAMS = 14
+ P_TENTATIVE_ROWS, P_FRAME_W, P_FRAME_H, P_BIRTH_IOU, P_FPS, P_MIN_MISSES) = range(12)
+N_PARAMS = 12
 
 
 @kernel
@@ -113,16 +105,11 @@ def advance(ints: IntArray, floats: FloatArray, det_index: NDArray[np.intp],
         matched = det_index[i] >= 0
         held = matched or rescued[i]
         ints[i, AGE] += 1
-        floats[i, LN_VAR] += p[P_SIZE_Q]  # the size's random walk over a frame
         if matched:
             ints[i, HITS] += 1
             floats[i, W] += p[P_SMOOTHING] * (zwh[i, 0] - floats[i, W])
             floats[i, H] += p[P_SMOOTHING] * (zwh[i, 1] - floats[i, H])
             floats[i, SCORE] += zscore[i]
-            g = floats[i, LN_VAR] / (floats[i, LN_VAR] + p[P_SIZE_R])  # Kalman gain
-            floats[i, LN_W] += g * (np.log(zwh[i, 0]) - floats[i, LN_W])
-            floats[i, LN_H] += g * (np.log(zwh[i, 1]) - floats[i, LN_H])
-            floats[i, LN_VAR] *= 1.0 - g
         if held:
             ints[i, MISSES] = 0
             ints[i, PREV_K] = ints[i, LAST_K]
@@ -300,8 +287,6 @@ def commit(ints: IntArray, floats: FloatArray, det_index: NDArray[np.intp],
         floats2[a, PREV_X], floats2[a, PREV_Y] = dxy[j, 0], dxy[j, 1]
         floats2[a, W], floats2[a, H] = dwh[j, 0], dwh[j, 1]
         floats2[a, SCORE] = cscore[j]
-        floats2[a, LN_W], floats2[a, LN_H] = np.log(dwh[j, 0]), np.log(dwh[j, 1])
-        floats2[a, LN_VAR] = p[P_SIZE_R]
         if p[P_CONFIRM_HITS] <= 1 and cscore[j] >= p[P_CONFIRM_SCORE]:
             ints2[a, STATE] = CONFIRMED
             ints2[a, TID] = next_id
@@ -326,7 +311,7 @@ def commit(ints: IntArray, floats: FloatArray, det_index: NDArray[np.intp],
         measured[a] = z[i]
         filtered[a] = pos[i]
         predicted[a] = centre[i]
-        box[a, 0], box[a, 1] = np.exp(floats[i, LN_W]), np.exp(floats[i, LN_H])
+        box[a, 0], box[a, 1] = floats[i, W], floats[i, H]
         velocity[a] = vel[i]
     for e in range(nb.size):
         a, c = rows.size + e, keep.size + nb[e]

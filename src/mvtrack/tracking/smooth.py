@@ -12,8 +12,7 @@ smoothed estimate from all of them (Rauch, Tung & Striebel 1965), with the track
 
   ``F = [[1, Δt], [0, 1]]``,  ``Q = q² [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``;
 
-- **box size**, ``ln w`` and ``ln h``, a random walk of :data:`mvtrack.tracking.config.SIZE_DRIFT`
-  per √s measured
+- **box size**, ``ln w`` and ``ln h``, a random walk of :data:`SIZE_DRIFT` per √s measured
   with the detection's box, ``R = measurement_noise²`` (a box off by a tenth of its size).
 
 Forward (the Kalman filter), for a row ``k`` with a measurement ``z``:
@@ -35,12 +34,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.tracking import config as _config
 from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.log import _columns, _split
 from mvtrack.types import TrackFrame
 
 FloatArray = NDArray[np.float64]
+
+#: σ_s, std of the random walk of ``ln`` box size, per √s: a walker's box changes by about
+#: a tenth of its size in a second as it nears or leaves the camera; chosen by leave-one-out
+#: over the frame-rate sweep (``docs/bench/framerate.md``)
+SIZE_DRIFT = 0.1
 
 
 def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
@@ -116,7 +119,7 @@ def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
         b00[r] = p00[q] + 2 * dt * p01[q] + dt**2 * p11[q] + a2 * dt**3 / 3  # P̄ = F P Fᵀ + Q
         b01[r] = p01[q] + dt * p11[q] + a2 * dt**2 / 2
         b11[r] = p11[q] + a2 * dt
-        sb[r], psb[r] = s[q], ps[q] + _config.SIZE_DRIFT**2 * dt
+        sb[r], psb[r] = s[q], ps[q] + SIZE_DRIFT**2 * dt
         m = has_z[r]
         gain = b00[r] + (sz * w[r]) ** 2  # H P̄ Hᵀ + R
         k0 = np.where(m, b00[r] / gain, 0.0)  # K = P̄ Hᵀ / (H P̄ Hᵀ + R); 0 without z

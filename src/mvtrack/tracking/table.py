@@ -55,9 +55,9 @@ class TrackTable:
     ----------
     ints : (N, 8) int64
         ``uid, track_id, state, hits, misses, age, last_k, prev_k``.
-    floats : (N, 10) float64
+    floats : (N, 7) float64
         ``last_xy (2), prev_xy (2), wh (2), score`` (the sum of the calibrated scores of the
-        track's detections), ``ln_w, ln_h, ln_var`` (the size filter of the rows' boxes).
+        track's detections).
     """
 
     ints: IntArray
