@@ -16,13 +16,13 @@ from mvtrack.types import TrackFrame, TrackState
 _CONF = np.array([1.0, 1.0, 0.5, 1.0, 0.0])
 
 #: the array fields of :class:`~mvtrack.types.TrackFrame`, in its order
-_FIELDS = (
+ROW_FIELDS = (
     "track_id", "state", "det_index", "measured_xy", "filtered_xy", "predicted_xy", "wh",
     "velocity",
 )
 
 
-def _columns(frames: list[TrackFrame]) -> dict[str, NDArray]:
+def concat_rows(frames: list[TrackFrame]) -> dict[str, NDArray]:
     """The rows of ``frames`` concatenated: ``frame`` (K,) and one array per field (new
     arrays, never views of the frames')."""
     frames = frames or [TrackFrame.empty(0)]
@@ -31,12 +31,12 @@ def _columns(frames: list[TrackFrame]) -> dict[str, NDArray]:
             np.array([f.frame for f in frames], dtype=np.int64), [len(f) for f in frames]
         )
     }
-    for name in _FIELDS:
+    for name in ROW_FIELDS:
         cols[name] = np.concatenate([getattr(f, name) for f in frames])
     return cols
 
 
-def _split(
+def split_rows(
     frames: list[TrackFrame], cols: dict[str, NDArray], keep: NDArray[np.bool_]
 ) -> list[TrackFrame]:
     """One :class:`TrackFrame` per frame of ``frames`` holding the rows of ``cols`` (aligned
@@ -45,7 +45,7 @@ def _split(
     out = []
     for i, f in enumerate(frames):
         k = bounds[i] + np.flatnonzero(keep[bounds[i] : bounds[i + 1]])
-        out.append(TrackFrame(f.frame, *(cols[name][k] for name in _FIELDS)))
+        out.append(TrackFrame(f.frame, *(cols[name][k] for name in ROW_FIELDS)))
     return out
 
 
@@ -157,7 +157,7 @@ class TrackLog:
     def columns(self) -> dict[str, NDArray]:
         """All rows as arrays: ``frame`` (K,) plus every array field of ``TrackFrame``."""
         if self._cache is None:
-            self._cache = _columns(self._frames)
+            self._cache = concat_rows(self._frames)
         return self._cache
 
     @property
@@ -228,7 +228,7 @@ def backfill(frames: list[TrackFrame], uids: list[NDArray[np.int64]]) -> list[Tr
             continue
         tid = tid_of[u]
         keep = (tid > 0).nonzero()[0]
-        out.append(TrackFrame(f.frame, tid[keep], *(getattr(f, n)[keep] for n in _FIELDS[1:])))
+        out.append(TrackFrame(f.frame, tid[keep], *(getattr(f, n)[keep] for n in ROW_FIELDS[1:])))
     return out
 
 
@@ -272,7 +272,7 @@ def interpolate_gaps(frames: list[TrackFrame], max_gap: int | None = None) -> li
     """
     if not frames:
         return []
-    c = _columns(frames)
+    c = concat_rows(frames)
     tid, frame_of = c["track_id"], c["frame"]
     # rows without a public ID (tentative tracks) are left as they are
     anchored = (c["det_index"] >= 0) | (c["state"] == int(TrackState.STOPPED)) | (tid <= 0)
@@ -315,12 +315,12 @@ def interpolate_gaps(frames: list[TrackFrame], max_gap: int | None = None) -> li
     old = ~np.isin(frame_of * width + tid, k * width + new["track_id"])
     order_new = np.lexsort((new["track_id"], k))
     allc = {name: np.concatenate([c[name][old], new[name][order_new]])
-            for name in ("frame", *_FIELDS)}
+            for name in ("frame", *ROW_FIELDS)}
     first = np.concatenate([np.zeros(int(old.sum()), np.int64), np.ones(k.size, np.int64)])
     order = np.lexsort((np.arange(first.size), first, allc["frame"]))
     fr = allc["frame"][order]
     cuts = np.flatnonzero(np.diff(fr)) + 1
     out = []
     for idx in np.split(order, cuts):
-        out.append(TrackFrame(int(allc["frame"][idx[0]]), *(allc[n][idx] for n in _FIELDS)))
+        out.append(TrackFrame(int(allc["frame"][idx[0]]), *(allc[n][idx] for n in ROW_FIELDS)))
     return out

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.tracking.config import TrackerConfig
-from mvtrack.tracking.log import _FIELDS, TrackLog, backfill, interpolate_gaps
+from mvtrack.tracking.log import ROW_FIELDS, TrackLog, backfill, interpolate_gaps
 from mvtrack.tracking.relink import relink as relink_tracks
 from mvtrack.tracking.scores import ScoreCalibration
 from mvtrack.tracking.smooth import smooth_tracks
@@ -218,6 +218,6 @@ def drop_weak(frames: list[TrackFrame], uids: list[IntArray], score: FloatArray,
             out.append(tf)
             out_u.append(uid)
         elif keep.any():
-            out.append(TrackFrame(tf.frame, *(getattr(tf, n)[keep] for n in _FIELDS)))
+            out.append(TrackFrame(tf.frame, *(getattr(tf, n)[keep] for n in ROW_FIELDS)))
             out_u.append(uid[keep])
     return out, out_u

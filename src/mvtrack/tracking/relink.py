@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 from mvtrack.association.distances import resolve_gate
 from mvtrack.tracking.config import TrackerConfig
-from mvtrack.tracking.log import _FIELDS, _columns
+from mvtrack.tracking.log import ROW_FIELDS, concat_rows
 from mvtrack.types import TrackFrame, TrackState
 
 FloatArray = NDArray[np.float64]
@@ -76,7 +76,7 @@ def relink(frames: list[TrackFrame], config: TrackerConfig) -> list[TrackFrame]:
     """
     if not frames:
         return []
-    c = _columns(frames)
+    c = concat_rows(frames)
     tid, fr = c["track_id"], c["frame"]
     measured = ((c["det_index"] >= 0) | (c["state"] == int(TrackState.STOPPED))) & (tid > 0)
     rows = np.flatnonzero(measured)
@@ -132,5 +132,5 @@ def relink(frames: list[TrackFrame], config: TrackerConfig) -> list[TrackFrame]:
         root = nxt
     out_tid = np.where(public, ids[root][pos], tid)
     cuts = np.flatnonzero(np.diff(fr)) + 1
-    return [TrackFrame(int(fr[idx[0]]), out_tid[idx], *(c[name][idx] for name in _FIELDS[1:]))
+    return [TrackFrame(int(fr[idx[0]]), out_tid[idx], *(c[name][idx] for name in ROW_FIELDS[1:]))
             for idx in np.split(np.arange(fr.size), cuts)]

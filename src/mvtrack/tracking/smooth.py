@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.tracking.config import TrackerConfig
-from mvtrack.tracking.log import _columns, _split
+from mvtrack.tracking.log import concat_rows, split_rows
 from mvtrack.types import TrackFrame
 
 FloatArray = NDArray[np.float64]
@@ -68,7 +68,7 @@ def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
     """
     if not frames:
         return []
-    c = _columns(frames)
+    c = concat_rows(frames)
     uid = c["track_id"]
     order = np.flatnonzero(uid > 0)
     if order.size == 0:
@@ -151,5 +151,5 @@ def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
     c["filtered_xy"][order] = x
     c["velocity"][order] = v / config.fps  # px/frame
     c["wh"][order] = np.exp(s)
-    return _split(frames, c, np.ones(uid.size, bool))
+    return split_rows(frames, c, np.ones(uid.size, bool))
 
