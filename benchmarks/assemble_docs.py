@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: fragments in reading order: the summary, the development benchmark (the frame-rate sweep,
 #: its rules and defaults), then from the filters up to whole videos
 ORDER = (
-    "summary", "framerate", "rules", "defaults", "filters", "association", "tracker",
+    "summary", "framerate", "rules", "defaults", "joint", "filters", "association", "tracker",
     "numpy-floor", "mot15", "tud", "pipeline", "frontend", "vehicles", "analytics", "structured",
     "sim", "batch",
 )
