@@ -487,6 +487,15 @@ def loo_report(res: dict[str, Any], command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def emit(text: str, res: dict[str, Any], out: str | None, json_path: str | None) -> None:
+    """Print the Markdown page and write it to ``out`` and the figures to ``json_path``."""
+    print(text)
+    if out:
+        Path(out).write_text(text)
+    if json_path:
+        Path(json_path).write_text(json.dumps(res, indent=1, default=str))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--peers-python", default=None,
@@ -520,11 +529,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             res = sweep(work, args.peers_python, args.previous_src, args.previous)
             text = report(res, command, args.previous_label)
-    print(text)
-    if args.out:
-        Path(args.out).write_text(text)
-    if args.json:
-        Path(args.json).write_text(json.dumps(res, indent=1, default=str))
+    emit(text, res, args.out, args.json)
     return 0
 
 

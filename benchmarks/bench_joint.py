@@ -152,11 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         res = joint(Path(tmp))
     text = report(res, command)
-    print(text)
-    if args.out:
-        Path(args.out).write_text(text)
-    if args.json:
-        Path(args.json).write_text(json.dumps(res, indent=1, default=str))
+    bf.emit(text, res, args.out, args.json)
     return 0
 
 
