@@ -140,11 +140,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=1, help="seed of the first run")
     ap.add_argument("--changes", default="{}",
                     help="JSON of settings changed for mvtrack (as bench_framerate)")
-    ap.add_argument("--out", default=None, help="write the Markdown page here")
-    ap.add_argument("--json", default=None, help="write the figures here")
-    args = ap.parse_args(argv)
-    if not bf.DATA.is_dir():
-        print(f"error: {bf.DATA} not found (the development sequences)", file=sys.stderr)
+    args = bf.parse_args(ap, argv)
+    if args is None:
         return 2
     if args.runs < 1 or not 0.0 <= args.drop < 1.0:
         print("error: --runs must be at least 1 and --drop in [0, 1)", file=sys.stderr)

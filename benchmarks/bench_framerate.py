@@ -496,6 +496,19 @@ def emit(text: str, res: dict[str, Any], out: str | None, json_path: str | None)
         Path(json_path).write_text(json.dumps(res, indent=1, default=str))
 
 
+def parse_args(ap: argparse.ArgumentParser, argv: list[str] | None
+               ) -> argparse.Namespace | None:
+    """Add ``--out`` and ``--json`` to a benchmark's parser and parse ``argv``; None (after a
+    one-line error) when the development sequences are missing."""
+    ap.add_argument("--out", default=None, help="write the Markdown page here")
+    ap.add_argument("--json", default=None, help="write the figures here")
+    args = ap.parse_args(argv)
+    if not DATA.is_dir():
+        print(f"error: {DATA} not found (the development sequences)", file=sys.stderr)
+        return None
+    return args
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--peers-python", default=None,
@@ -511,11 +524,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="a JSON of an earlier --previous-src run (its figures reused)")
     ap.add_argument("--previous-label", default="",
                     help="how the earlier version is named in the table, e.g. ' (e15da75)'")
-    ap.add_argument("--out", default=None, help="write the Markdown table here")
-    ap.add_argument("--json", default=None, help="write the figures here")
-    args = ap.parse_args(argv)
-    if not DATA.is_dir():
-        print(f"error: {DATA} not found (the development sequences)", file=sys.stderr)
+    args = parse_args(ap, argv)
+    if args is None:
         return 2
     command = "python benchmarks/bench_framerate.py " + shlex.join(argv or sys.argv[1:])
     with tempfile.TemporaryDirectory() as tmp:

@@ -142,11 +142,8 @@ def report(res: dict[str, Any], command: str) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=None, help="write the Markdown page here")
-    ap.add_argument("--json", default=None, help="write the figures here")
-    args = ap.parse_args(argv)
-    if not bf.DATA.is_dir():
-        print(f"error: {bf.DATA} not found (the development sequences)", file=sys.stderr)
+    args = bf.parse_args(ap, argv)
+    if args is None:
         return 2
     command = "python benchmarks/bench_joint.py " + shlex.join(argv or sys.argv[1:])
     with tempfile.TemporaryDirectory() as tmp:
