@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from mvtrack.association.gate import Gate
+from mvtrack.association.gate import Gate, GateRegions
 from mvtrack.types import TrackFrame, TrackState
 from mvtrack.viz.annotate import (
     GATE_COLOR,
@@ -17,6 +17,7 @@ from mvtrack.viz.annotate import (
     draw_gates,
     ellipse_points,
     gate_ellipses,
+    shown_gates,
 )
 from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
 
@@ -153,12 +154,24 @@ def test_trails_follow_each_id_in_time_order() -> None:
     assert list(ids) == [2, 7]
     np.testing.assert_array_equal(lines[0], [[50, 9], [50, 11], [50, 13]])
     np.testing.assert_array_equal(lines[1], [[12, 5], [13, 5], [14, 5]])
+    trails.push(_frame(5, [7], [1], [[15, 5]]))  # track 2 has ended: its trail goes
+    ids, lines = trails.polylines()
+    assert list(ids) == [7]
+    np.testing.assert_array_equal(lines[0], [[13, 5], [14, 5], [15, 5]])
     empty = TrailBuffer(length=4)
     empty.push(_frame(0, [], [], np.zeros((0, 2))))
     empty.push(_frame(1, [3], [1], [[np.nan, np.nan]]))
     assert empty.polylines()[1] == []
     with pytest.raises(ValueError, match="trail length"):
         TrailBuffer(length=1)
+
+
+def test_gates_are_drawn_only_for_the_confirmed_tracks_with_a_box() -> None:
+    ids = np.array([4, 5, -6, 7, 9], np.int64)  # 9 is not in the frame, -6 is tentative
+    gates = GateRegions(uid=np.arange(5), track_id=ids, center=np.zeros((5, 2)),
+                        shape=np.broadcast_to(np.eye(2), (5, 2, 2)).copy(), r2=9.21)
+    tf = _frame(0, [4, 5, -6, 7], [1, 1, 0, 1], [[10, 10], [np.nan, np.nan], [30, 30], [40, 40]])
+    assert list(shown_gates(gates, tf).track_id) == [4, 7]
 
 
 def test_annotate_frame_leaves_input_untouched_and_draws() -> None:

@@ -72,7 +72,8 @@ def track_to_folder(
       coasting predictions are drawn in the video, and written only with
       ``settings.coasting`` (``--coasting``);
     - ``tracks.mp4`` — the annotated video (unless ``settings.video`` is False): boxes in
-      their state colour, IDs, trails and the gates the tracker applies to the next frame
+      their state colour, IDs, the trails of the tracks in the frame and the gates the
+      tracker applies to the next frame for the confirmed tracks drawn
       (:meth:`~mvtrack.tracking.Tracker.gates`: the filter's innovation ellipses by
       default, circles for the Euclidean gate);
     - ``trajectories.png`` — every track's path over the first frame;
@@ -142,7 +143,7 @@ def track_to_folder(
     from mvtrack.video.loop import flags_of, shown_scores
     from mvtrack.video.relink import Relinker
     from mvtrack.video.stream import StreamingOutput
-    from mvtrack.viz.annotate import TrailBuffer, annotate_frame
+    from mvtrack.viz.annotate import TrailBuffer, annotate_frame, shown_gates
     from mvtrack.viz.plots import TrackRows, save_figure, trajectory_figure
 
     if parts is None:
@@ -209,9 +210,8 @@ def track_to_folder(
             if writer is None and not shot:
                 return
             gates: dict[str, Any] = {}
-            if settings.gates:  # the confirmed tracks' gates for the next frame
-                g = tracker.gates()
-                g = g.take(g.track_id > 0)
+            if settings.gates:  # the next frame's gates of the confirmed tracks drawn
+                g = shown_gates(tracker.gates(), tracks)
                 gates = {"gate_center": g.center, "gate_cov": g.shape, "gate_r2": g.r2}
             text = [f"frame {k}  tracks {len(tracks)}", label]
             img = annotate_frame(image, tracks, trails=trails, text=text, **gates)

@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack.association.gate import GateRegions
 from mvtrack.types import TrackFrame, TrackState
 from mvtrack.viz.labels import place_frame_labels
 
@@ -150,6 +151,13 @@ def draw_gates(
     return image
 
 
+def shown_gates(gates: GateRegions, tracks: TrackFrame) -> GateRegions:
+    """The gates worth drawing: those of confirmed tracks (``track_id > 0``) with a box in
+    ``tracks``, so that every drawn ellipse belongs to a drawn box."""
+    shown = np.isfinite(np.hstack([tracks.filtered_xy, tracks.wh])).all(axis=1)
+    return gates.take((gates.track_id > 0) & np.isin(gates.track_id, tracks.track_id[shown]))
+
+
 def draw_boxes(
     image: NDArray[np.uint8],
     tracks: TrackFrame,
@@ -235,13 +243,14 @@ class TrailBuffer:
         self._xy.append(np.asarray(tracks.filtered_xy, dtype=np.float64).reshape(-1, 2))
 
     def polylines(self) -> tuple[NDArray[np.int64], list[NDArray[np.int32]]]:
-        """Track IDs with at least two points, and each one's points (oldest first)."""
+        """The tracks of the newest frame with at least two points, and each one's points
+        (oldest first); a track that has ended leaves no trail behind."""
         if not self._ids:
             return np.zeros(0, dtype=np.int64), []
         ids = np.concatenate(list(self._ids))
         xy = np.concatenate(list(self._xy))
         age = np.concatenate([np.full(len(a), k) for k, a in enumerate(self._ids)])
-        ok = np.isfinite(xy).all(axis=1)
+        ok = np.isfinite(xy).all(axis=1) & np.isin(ids, self._ids[-1])
         ids, xy, age = ids[ok], xy[ok], age[ok]
         if ids.size == 0:
             return ids, []
