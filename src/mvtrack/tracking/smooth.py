@@ -6,11 +6,28 @@ box for a frame or two. Offline every measurement of the track is known, so each
 smoothed estimate from all of them (Rauch, Tung & Striebel 1965), with the tracker's own noise:
 
 - **position**, per axis, a constant-velocity model in continuous time with white
-  acceleration of spectral density ``q² = (accel_noise · w)²`` (box sizes/s², ``w`` the
-  track's box along the axis) over the ``Δt`` seconds between two rows, measured with
-  ``R = (measurement_noise · w)²``:
+  acceleration over the ``Δt`` seconds between two rows, measured with
+  ``R = (measurement_noise · w)²`` (``w`` the track's box along the axis):
 
-  ``F = [[1, Δt], [0, 1]]``,  ``Q = q² [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``;
+  ``F = [[1, Δt], [0, 1]]``,  ``Q = q² [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``,
+
+  where the acceleration is that of the online ``kalman-imm``'s two modes, steady
+  (``a_1 = accel_noise``) and manoeuvring (``a_2 = manoeuvre_noise``, box sizes/s²), each
+  row weighing them by their probability given its measurement: the modes switch as a
+  Markov chain with the mean times ``τ_m`` of :data:`~mvtrack.tracking.config.MODE_TIMES`,
+
+  ``μ̄_m = μ_m e^{−Δt/τ_m} + μ_{m'} (1 − e^{−Δt/τ_{m'}})`` (from the stationary
+  ``μ_m = τ_m / Σ τ`` at a track's first row),
+
+  each mode explains the innovation ``e = z − H F x`` on both axes with
+  ``S_m = H (F P Fᵀ + Q_m) Hᵀ + R``,
+
+  ``μ_m ∝ μ̄_m Π_axes N(e; 0, S_m)``,  ``q² = (Σ_m μ_m a_m²) w²``
+
+  (the two modes' ``Q`` moment-matched, as the online filter's gate matches their
+  covariances). A track that walks steadily is smoothed with the steady mode's stiffness; a
+  car that brakes, or a track that jumps to its neighbour at a low frame rate, is not
+  smeared over the rows around the jump;
 
 - **box size**, ``ln w`` and ``ln h``, a random walk of :data:`SIZE_DRIFT` per √s measured
   with the detection's box, ``R = measurement_noise²`` (a box off by a tenth of its size).
@@ -34,7 +51,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.tracking.config import TrackerConfig
+from mvtrack.tracking.config import MODE_TIMES, TrackerConfig
 from mvtrack.tracking.log import concat_rows, split_rows
 from mvtrack.types import TrackFrame
 
@@ -57,7 +74,8 @@ def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
     sizes : list of (N_k, 2) float arrays
         Each row's detection box ``(w, h)``; NaN for a row without detection.
     config : TrackerConfig
-        ``fps``, ``measurement_noise``, ``accel_noise`` and ``velocity_prior``.
+        ``fps``, ``measurement_noise``, ``accel_noise``, ``manoeuvre_noise`` and
+        ``velocity_prior``.
 
     Returns
     -------
@@ -94,7 +112,11 @@ def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
     zs = np.log(np.concatenate(sizes)[order])
     has_z = np.isfinite(z).all(axis=1)[:, None]
     has_s = np.isfinite(zs).all(axis=1)[:, None]
-    sz, sa = config.measurement_noise, config.accel_noise
+    sz = config.measurement_noise
+    accel = np.array([config.accel_noise, config.manoeuvre_noise])
+    taus = np.asarray(MODE_TIMES, dtype=float)
+    mu = np.empty((order.size, 2))  # each row's weight of the steady and manoeuvring mode
+    mu[:n_at[0]] = taus / taus.sum()  # the stationary weights
 
     # forward: filtered (x, v, P00, P01, P11) and predicted, per row and axis; size (s, Ps)
     shape = (order.size, 2)
@@ -113,18 +135,30 @@ def smooth_tracks(frames: list[TrackFrame], sizes: list[FloatArray],
         r = slice(off[j], off[j] + n_at[j])  # this step's rows
         q = slice(off[j - 1], off[j - 1] + n_at[j])  # the same tracks' rows before
         dt = (t[r] - t[q])[:, None]
-        a2 = (sa * w[r]) ** 2
         xb[r] = x[q] + dt * v[q]  # x̄ = F x
         vb[r] = v[q]
-        b00[r] = p00[q] + 2 * dt * p01[q] + dt**2 * p11[q] + a2 * dt**3 / 3  # P̄ = F P Fᵀ + Q
+        c00 = p00[q] + 2 * dt * p01[q] + dt**2 * p11[q]  # F P Fᵀ
+        m = has_z[r]
+        rr = (sz * w[r]) ** 2
+        e = np.where(m, z[r] - xb[r], 0.0)
+        # the two modes' a priori weights over dt, then their likelihoods of the innovation
+        # (both axes): the weight of each mode's Q given this row's measurement
+        stay = np.exp(-dt / taus)  # (n, 2): each mode kept over Δt
+        prior = mu[q] * stay + mu[q][:, ::-1] * (1 - stay[:, ::-1])  # Markov switching
+        # S_m = H P̄_m Hᵀ + R per row, axis and mode; log N(e; 0, S_m) summed over the axes
+        sm = (c00 + rr)[:, :, None] + (w[r] ** 2 * dt**3 / 3)[:, :, None] * accel**2
+        ll = np.where(m[:, :, None], -0.5 * (e[:, :, None] ** 2 / sm + np.log(sm)), 0.0)
+        ll = ll.sum(axis=1)
+        post = prior * np.exp(ll - ll.max(axis=1, keepdims=True))
+        mu[r] = post / post.sum(axis=1, keepdims=True)
+        a2 = (mu[r] @ accel**2)[:, None] * w[r] ** 2  # Q of the modes, moment-matched
+        b00[r] = c00 + a2 * dt**3 / 3  # P̄ = F P Fᵀ + Q
         b01[r] = p01[q] + dt * p11[q] + a2 * dt**2 / 2
         b11[r] = p11[q] + a2 * dt
         sb[r], psb[r] = s[q], ps[q] + SIZE_DRIFT**2 * dt
-        m = has_z[r]
-        gain = b00[r] + (sz * w[r]) ** 2  # H P̄ Hᵀ + R
+        gain = b00[r] + rr  # H P̄ Hᵀ + R
         k0 = np.where(m, b00[r] / gain, 0.0)  # K = P̄ Hᵀ / (H P̄ Hᵀ + R); 0 without z
         k1 = np.where(m, b01[r] / gain, 0.0)
-        e = np.where(m, z[r] - xb[r], 0.0)
         x[r] = xb[r] + k0 * e
         v[r] = vb[r] + k1 * e
         p00[r] = b00[r] - k0 * b00[r]  # P = (I − K H) P̄
