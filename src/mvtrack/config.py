@@ -166,6 +166,10 @@ class RunSettings:
         Also write the rows of coasting tracks (no detection, while the tracker's prediction
         is within ``coast_std`` box sizes) to ``results.txt``: ``--coasting``, no key in the
         file.
+    offline : bool
+        Revise the rows once the whole video is tracked: each confirmed track written from
+        its first detection and smoothed over all of them (:mod:`mvtrack.video.offline`):
+        ``--offline``, no key in the file.
     """
 
     tracker: dict[str, Any] = field(default_factory=dict)
@@ -179,6 +183,7 @@ class RunSettings:
     analytics: dict[str, Any] | None = None
     relink: RelinkSettings = field(default_factory=RelinkSettings)
     coasting: bool = False
+    offline: bool = False
 
     def with_overrides(self, **tracker_overrides: Any) -> RunSettings:
         """A copy with the non-None ``tracker_overrides`` (CLI options) applied."""

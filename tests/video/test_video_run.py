@@ -8,42 +8,12 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
+from _media import squares_video
 from mvtrack.config import RunSettings
 from mvtrack.types import Detections, TrackFrame
 from mvtrack.video import run_frames, track_to_folder
 
 DM = "disturbance-map"
-
-
-def squares_video(
-    n_frames: int = 60, size: tuple[int, int] = (160, 120), noise: float = 2.0, seed: int = 0
-) -> tuple[list[np.ndarray], np.ndarray]:
-    """Two 10×8 bright boxes moving across a textured grey background, and their centres.
-
-    Box A (bright) moves right at 2 px/frame along y = 40, box B (dark) left at 1.5 px/frame
-    along y = 85.
-    Both appear at frame 15, after the disturbance map's background has settled on the empty
-    road (boxes sliding in over the border give a biased centroid while partly visible).
-    Returns the frames and the true centres (n_frames, 2, 2).
-    """
-    rng = np.random.default_rng(seed)
-    w, h = size
-    base = np.full((h, w, 3), 90, np.uint8)
-    base[::8, :, :] = 100  # faint texture
-    frames, centres = [], np.zeros((n_frames, 2, 2))
-    for k in range(n_frames):
-        img = base.astype(np.float64)
-        for j, (x, y, color) in enumerate(
-            [(2.0 * k - 10, 40.0, (40, 220, 230)), (w + 5 - 1.5 * k, 85.0, (30, 30, 30))]
-        ):
-            centres[k, j] = (x, y)
-            if k < 15:
-                continue
-            x0, y0 = round(x - 5), round(y - 4)
-            img[y0 : y0 + 8, x0 : x0 + 10] = color
-        img += rng.normal(0, noise, img.shape)
-        frames.append(np.clip(img, 0, 255).astype(np.uint8))
-    return frames, centres
 
 
 class CountingTracker:

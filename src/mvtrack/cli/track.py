@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -50,6 +51,13 @@ def register(app: typer.Typer) -> None:
             typer.Option("--coasting/--no-coasting",
                          help="Also write the rows of coasting tracks (no detection, while the "
                          "prediction is within the tracker's coast_std) to results.txt."),
+        ] = False,
+        offline: Annotated[
+            bool,
+            typer.Option("--offline/--online",
+                         help="Revise the rows once the whole video is tracked: each "
+                         "confirmed track written from its first detection and smoothed over "
+                         "all of them (the video is then drawn in a second pass)."),
         ] = False,
         no_video: NoVideo = False,
         no_templates: NoTemplates = False,
@@ -121,6 +129,11 @@ def register(app: typer.Typer) -> None:
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
             score_high=score_high, min_score=min_score, fps=fps, coasting=coasting,
         )
+        if offline:
+            if flush is not None:
+                raise InputError("--offline revises rows after the last frame: it cannot "
+                                 "stream (--flush)")
+            settings = dataclasses.replace(settings, offline=True)
         with run_folder(out, force=force, inputs=[video], kind="track"):
             run = track_video(video, out, settings, fps=settings.frame_rate,
                               max_frames=max_frames, snapshot=snapshot, flush=flush,

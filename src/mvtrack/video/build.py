@@ -77,10 +77,14 @@ def build_tracker_config(settings: RunSettings, fps: float) -> Any:
 
 
 def build_tracker(settings: RunSettings, fps: float) -> Any:
-    """A fresh :class:`~mvtrack.tracking.Tracker` for ``settings`` (validates predictor etc.)."""
+    """A fresh :class:`~mvtrack.tracking.Tracker` for ``settings`` (validates predictor etc.);
+    an offline run's (``settings.offline``) outputs its tentative rows too, which the video
+    loop keeps aside (:class:`mvtrack.video.offline.OfflineRows`)."""
     from mvtrack.tracking import Tracker
 
     config = build_tracker_config(settings, fps)
+    if settings.offline:
+        config = config.replace(output_tentative=True)
     size = settings.tracker.get("frame_size")
     try:
         return Tracker(config, frame_size=None if size is None else tuple(size))

@@ -249,6 +249,7 @@ def run_frames(
     desc: str = "tracking",
     keep: bool = True,
     relink: Any = None,
+    offline: Any = None,
 ) -> PipelineResult:
     """Detect and track every frame of ``frames``.
 
@@ -281,6 +282,9 @@ def run_frames(
         (:class:`mvtrack.video.relink.Relinker`); called after the detector and the rescuer
         have seen the tracker's own IDs, so everything kept, drawn and written carries the
         shown IDs.
+    offline : OfflineRows, optional
+        The ``tracker`` of an offline run (:class:`mvtrack.video.offline.OfflineRows`): the
+        tentative rows of each step are kept aside; everything after sees the public rows.
 
     Returns
     -------
@@ -322,6 +326,8 @@ def run_frames(
                 else:  # pieces of stopped vehicles left out: their templates hold them
                     tracks = step_without(tracker, rescuer, image, dets,
                                           fragments(image, dets))
+                if offline is not None:
+                    tracks = offline.public(tracks, dets)
                 if observe is not None:
                     observe(dets, tracks)
                 if keep:

@@ -62,6 +62,7 @@ def track_to_folder(
     snapshot: int | None = None,
     flush: float | None = None,
     masks: str | os.PathLike[str] | None = None,
+    reread: Callable[[], Iterable[Image]] | None = None,
 ) -> RunOutput:
     """Track ``frames`` and write everything into the folder ``out``.
 
@@ -86,6 +87,12 @@ def track_to_folder(
 
     Ctrl-C during the loop ends it early; the files are still written for the frames
     processed (``summary["interrupted"]``).
+
+    With ``settings.offline`` the rows are revised once every frame is tracked
+    (:mod:`mvtrack.video.offline`: confirmed tracks written from their first detection, every
+    row smoothed), and the files hold the revised rows. The annotated video and the snapshot
+    are then drawn in a second pass over the frames (``reread``), without gates (they are
+    the live tracker's).
 
     With ``flush`` (seconds) the run streams (:mod:`mvtrack.video.stream`): ``results.txt`` and
     ``states.csv`` are created at once and every ``flush`` seconds get the rows of the frames
@@ -129,18 +136,24 @@ def track_to_folder(
     masks : path, optional
         Folder for the foreground masks; the front end must have a ``mask`` (every
         background-model front end has; ``hog`` has not).
+    reread : callable, optional
+        Gives the frames again, for the drawing pass of an offline run with a video or a
+        snapshot (required then).
 
     Raises
     ------
     InputError
         ``masks`` with a front end that has no foreground mask, or a folder that cannot be
-        created (before any frame is read).
+        created; an offline run that streams (``flush``) or must draw without ``reread``
+        (before any frame is read).
     """
     import cv2
 
+    from mvtrack.errors import InputError
     from mvtrack.io.atomic import atomic_path, write_json
     from mvtrack.tracking import TrackLog
-    from mvtrack.video.loop import flags_of, shown_scores
+    from mvtrack.video.loop import flags_of, progress_bar, shown_scores
+    from mvtrack.video.offline import OfflineRows
     from mvtrack.video.relink import Relinker
     from mvtrack.video.stream import StreamingOutput
     from mvtrack.viz.annotate import TrailBuffer, annotate_frame, shown_gates
@@ -151,6 +164,15 @@ def track_to_folder(
         detector, tracker = build_detector(settings), build_tracker(settings, fps)
     else:
         detector, tracker = parts
+    offline = None
+    if settings.offline:
+        if flush is not None:
+            raise InputError("--offline revises rows after the last frame: it cannot stream "
+                             "(--flush)")
+        if (settings.video or snapshot is not None) and reread is None:
+            raise InputError("--offline draws the video in a second pass over the source, "
+                             "which cannot be read twice: add --no-video (and no --snapshot)")
+        offline = tracker = OfflineRows(tracker)
     mask_writer = _mask_writer(masks, detector) if masks is not None else None
     rescuer = build_rescuer(settings, tracker, detector) if settings.templates else None
     relinker = Relinker(fps, settings.relink) if settings.relink.enabled else None
@@ -199,8 +221,14 @@ def track_to_folder(
                 log.append(tracks)
             else:
                 stream.add(tracks, flags_of(detector, len(dets)), shown_scores(rescuer, relinker))
+            if offline is not None:
+                offline.add(tracks, dets)
             if k == 0:
                 background.append(image.copy())
+            if offline is None:
+                draw(k, image, tracks, settings.gates)
+
+        def draw(k: int, image: Image, tracks: TrackFrame, with_gates: bool) -> None:
             shot = snapshot is not None and k == snapshot
             if writer is None and snapshot is None:
                 return
@@ -210,7 +238,7 @@ def track_to_folder(
             if writer is None and not shot:
                 return
             gates: dict[str, Any] = {}
-            if settings.gates:  # the next frame's gates of the confirmed tracks drawn
+            if with_gates:  # the next frame's gates of the confirmed tracks drawn
                 g = shown_gates(tracker.gates(), tracks)
                 gates = {"gate_center": g.center, "gate_cov": g.shape, "gate_r2": g.r2}
             text = [f"frame {k}  tracks {len(tracks)}", label]
@@ -229,12 +257,24 @@ def track_to_folder(
         result = run_frames(
             frames, detector, tracker, rescuer=rescuer, max_frames=max_frames,
             on_frame=on_frame, total=total, progress=progress, keep=stream is None,
-            relink=relinker,
+            relink=relinker, offline=offline,
         )
         if stream is not None:
             stream.close()
         if result.error is None and source_error is not None and not result.interrupted:
             result.error = source_error()
+        if offline is not None:
+            log = offline.finish(log, relinker.shown if relinker is not None else None)
+            if reread is not None and (writer is not None or snapshot is not None):
+                bar = progress_bar(len(log), "drawing", progress)
+                try:  # the second pass: the revised rows drawn on the frames again
+                    for k, (image, tracks) in enumerate(zip(reread(), log, strict=False)):
+                        draw(k, image, tracks, False)
+                        bar.update(1)
+                except KeyboardInterrupt:  # the video keeps the frames drawn
+                    result.interrupted = True
+                finally:
+                    bar.close()
 
     if stream is None:
         paths["results"] = out / "results.txt"
@@ -419,5 +459,21 @@ def track_video(
             (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
             out=out, max_frames=max_frames, total=src.frame_count, source=str(video),
             progress=progress, parts=parts, source_error=lambda: src.error, snapshot=snapshot,
-            flush=flush, masks=masks,
+            flush=flush, masks=masks, reread=_reader(video, fps),
         )
+
+
+def _reader(video: str | int, fps: float | None) -> Callable[[], Iterable[Image]] | None:
+    """Reads a file or image folder again (an offline run's drawing pass); None for a camera
+    or a network stream, which give other frames when opened again."""
+    from mvtrack.io.video import open_source
+
+    if isinstance(video, int) or str(video).isdigit() or "://" in str(video):
+        return None
+
+    def frames() -> Iterable[Image]:
+        with open_source(video, fps=fps) as again:
+            for _, frame in again:
+                yield frame
+
+    return frames
