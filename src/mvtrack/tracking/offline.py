@@ -136,12 +136,18 @@ def track_detections(
 
 
 def _of_detection(tf: TrackFrame, seen: dict[int, Detections], field: str) -> FloatArray:
+    """:func:`of_detection` with ``seen`` holding the detections of the frames the rows
+    came from."""
+    return of_detection(tf, seen[tf.frame] if (tf.det_index >= 0).any() else None, field)
+
+
+def of_detection(tf: TrackFrame, dets: Detections | None, field: str) -> FloatArray:
     """``field`` (``"score"``, ``"wh"``) of each row's detection in ``tf``, NaN for a row
-    without one; ``seen`` holds the detections of the frames the rows came from."""
+    without one; ``dets`` are the detections of the frame (None when no row has one)."""
     has = tf.det_index >= 0
-    if not has.any():
+    if dets is None or not has.any():
         return np.full((len(tf), 2) if field == "wh" else len(tf), np.nan)
-    values = getattr(seen[tf.frame], field)
+    values = getattr(dets, field)
     out = np.full((len(tf), *values.shape[1:]), np.nan)
     out[has] = values[tf.det_index[has]]
     return out

@@ -27,14 +27,16 @@ tracks of clutter), so it is an option.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.tracking.log import ROW_FIELDS, TrackLog
+from mvtrack.tracking.log import TrackLog
+from mvtrack.tracking.offline import of_detection
 from mvtrack.tracking.smooth import smooth_tracks
-from mvtrack.types import Detections, TrackFrame, take_rows
+from mvtrack.types import Detections, TrackFrame, concat_rows, take_rows
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
@@ -87,13 +89,13 @@ class OfflineRows:
         self.row_uids = uids[public]
         self._uid_ids.append(np.column_stack([self.row_uids, tracks.track_id[public]]))
         late = take_rows(tracks, np.flatnonzero(tentative))
-        self._tentative.append((late, uids[tentative], _sizes(late, dets)))
+        self._tentative.append((late, uids[tentative], of_detection(late, dets, "wh")))
         return tracks if public.size == len(tracks) else take_rows(tracks, public)
 
     def add(self, tracks: TrackFrame, dets: Detections) -> None:
         """The rows the online run writes for this frame (shown IDs), and ``dets``, the
         frame's detections (their boxes are the smoother's measured sizes)."""
-        self._sizes.append(_sizes(tracks, dets))
+        self._sizes.append(of_detection(tracks, dets, "wh"))
         self._frames += 1
 
     def finish(self, log: TrackLog, shown: Any = None) -> TrackLog:
@@ -133,9 +135,8 @@ class OfflineRows:
                 tid[tid > 0] = shown(tid[tid > 0])
             keep = np.flatnonzero((tid > 0) & np.isin(tid, written))
             if keep.size:
-                late = take_rows(t, keep)
-                late = TrackFrame(f.frame, tid[keep], *(getattr(late, n) for n in ROW_FIELDS[1:]))
-                f = _concat(f, late)
+                late = dataclasses.replace(take_rows(t, keep), track_id=tid[keep])
+                f = concat_rows(f, late)
                 wh = np.concatenate([wh, twh[keep]])
             out.append(f)
             sizes.append(wh)
@@ -148,18 +149,3 @@ class OfflineRows:
         for f in out:
             result.append(f)
         return result
-
-
-def _sizes(tracks: TrackFrame, dets: Detections) -> FloatArray:
-    """The detection box ``(w, h)`` of each row of ``tracks``, NaN for a row without one."""
-    out = np.full((len(tracks), 2), np.nan)
-    has = tracks.det_index >= 0
-    if has.any():
-        out[has] = dets.wh[tracks.det_index[has]]
-    return out
-
-
-def _concat(a: TrackFrame, b: TrackFrame) -> TrackFrame:
-    """The rows of ``a`` then those of ``b`` (the same frame)."""
-    return TrackFrame(a.frame, *(np.concatenate([getattr(a, n), getattr(b, n)])
-                                 for n in ROW_FIELDS))
