@@ -296,3 +296,22 @@ def test_batch_folder_holds_the_files_of_track(videos, tmp_path, scheduler) -> N
                      if (e2, d2) == (e, d))
          for e, d in (("middle", "forward"), ("middle", "backward"), ("left", "entries"))}
     assert n == {("middle", "forward"): 0, ("middle", "backward"): 1, ("left", "entries"): 1}
+
+
+def test_batch_offline_gives_the_files_of_track_offline(videos, tmp_path, scheduler) -> None:
+    """``--offline`` reaches each worker: the revised rows and the video drawn in the second
+    pass are those of ``mvtrack track --offline``, and differ from the online run's."""
+    out = tmp_path / "batch"
+    code = main(["batch", str(videos["boxes"]), "--out", str(out), "--scheduler", scheduler,
+                 "--offline", "--max-frames", "30"])
+    assert code == 0
+    seq, online = tmp_path / "seq", tmp_path / "online"
+    assert main(["track", str(videos["boxes"]), "--out", str(seq), "--offline",
+                 "--max-frames", "30"]) == 0
+    assert main(["track", str(videos["boxes"]), "--out", str(online),
+                 "--max-frames", "30"]) == 0
+    for f in ("results.txt", "states.csv", "tracks.mp4"):
+        assert (out / "boxes" / f).read_bytes() == (seq / f).read_bytes(), f
+    assert (seq / "results.txt").read_bytes() != (online / "results.txt").read_bytes()
+    summary = json.loads((out / "boxes" / "summary.json").read_text())
+    assert summary["settings"]["offline"] is True

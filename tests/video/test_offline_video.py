@@ -19,7 +19,7 @@ from mvtrack.tracking.smooth import smooth_tracks
 from mvtrack.types import Detections, TrackFrame, TrackState
 from mvtrack.video import track_to_folder
 from mvtrack.video.offline import OfflineRows
-from mvtrack.video.run import _reader
+from mvtrack.video.run import source_reader
 
 TENT, CONF = int(TrackState.TENTATIVE), int(TrackState.CONFIRMED)
 
@@ -144,8 +144,8 @@ def test_offline_cannot_stream_nor_draw_a_source_read_once(tmp_path) -> None:
     with pytest.raises(InputError, match="--no-video"):
         track_to_folder(frames, fps=30.0, size=(160, 120), settings=_settings(offline=True),
                         out=tmp_path / "b", progress=False)
-    assert _reader(0, None) is None and _reader("rtsp://camera/1", None) is None
-    assert _reader("2", None) is None and _reader("clip.mp4", None) is not None
+    assert source_reader(0, None) is None and source_reader("rtsp://camera/1", None) is None
+    assert source_reader("2", None) is None and source_reader("clip.mp4", None) is not None
 
 
 def test_cli_offline_draws_the_revised_rows_in_a_second_pass(tmp_path) -> None:

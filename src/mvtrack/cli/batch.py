@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import glob
 import sys
 from pathlib import Path
@@ -132,6 +133,12 @@ def register(app: typer.Typer) -> None:
             typer.Option("--coasting/--no-coasting",
                          help="Also write the rows of coasting tracks to each results.txt."),
         ] = False,
+        offline: Annotated[
+            bool,
+            typer.Option("--offline/--online",
+                         help="Revise each video's rows once it is tracked, as `mvtrack track "
+                         "--offline` does (the video is then drawn in a second pass)."),
+        ] = False,
         no_video: NoVideo = False,
         no_templates: NoTemplates = False,
         force: Force = False,
@@ -168,6 +175,8 @@ def register(app: typer.Typer) -> None:
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
             score_high=score_high, min_score=min_score, fps=fps, coasting=coasting,
         )
+        if offline:
+            settings = dataclasses.replace(settings, offline=True)
         with run_folder(out, force=force, inputs=sources, kind="batch"):
             items = track_many(
                 sources, out, settings, workers=workers, scheduler=scheduler,

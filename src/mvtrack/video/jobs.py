@@ -230,7 +230,7 @@ def _track_until_stopped(video: str, out: str, settings: RunSettings, fps: float
     """:func:`mvtrack.video.track_video` with its frames taken through ``flag``."""
     from mvtrack.io.video import open_source
     from mvtrack.video.build import build_detector, build_tracker
-    from mvtrack.video.run import track_to_folder
+    from mvtrack.video.run import source_reader, track_to_folder
     from mvtrack.video.settings import resolve_settings
 
     if flag.is_set():  # the batch was interrupted before this video started
@@ -243,6 +243,7 @@ def _track_until_stopped(video: str, out: str, settings: RunSettings, fps: float
             flag.frames(frame for _, frame in src), fps=src.fps, size=src.size,
             settings=resolved, out=out, max_frames=max_frames, total=src.frame_count,
             source=str(video), progress=False, parts=parts, source_error=lambda: src.error,
+            reread=source_reader(video, fps),
         )
 
 

@@ -459,11 +459,11 @@ def track_video(
             (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
             out=out, max_frames=max_frames, total=src.frame_count, source=str(video),
             progress=progress, parts=parts, source_error=lambda: src.error, snapshot=snapshot,
-            flush=flush, masks=masks, reread=_reader(video, fps),
+            flush=flush, masks=masks, reread=source_reader(video, fps),
         )
 
 
-def _reader(video: str | int, fps: float | None) -> Callable[[], Iterable[Image]] | None:
+def source_reader(video: str | int, fps: float | None) -> Callable[[], Iterable[Image]] | None:
     """Reads a file or image folder again (an offline run's drawing pass); None for a camera
     or a network stream, which give other frames when opened again."""
     from mvtrack.io.video import open_source
