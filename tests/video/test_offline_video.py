@@ -170,3 +170,12 @@ def test_cli_offline_draws_the_revised_rows_in_a_second_pass(tmp_path) -> None:
                           capture_output=True, text=True)
     assert proc.returncode != 0 and "--flush" in proc.stderr
     assert "Traceback" not in proc.stderr and not (tmp_path / "s" / "results.txt").exists()
+
+
+def test_source_kind_decides_what_can_be_read_twice() -> None:
+    from mvtrack.io.video import source_kind
+
+    assert [source_kind(s) for s in (0, "1", " 2 ", "rtsp://cam/1", "http://x/v.mp4",
+                                     "clip.mp4", "frames/", "my://", "ftp_clip.avi")] == [
+        "camera", "camera", "camera", "stream", "stream", "file", "file", "stream", "file"]
+    assert source_reader(" 2 ", None) is None  # a camera index with spaces, as open_source

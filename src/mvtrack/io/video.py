@@ -260,6 +260,15 @@ def _capture(src: str, threads: int | None) -> cv2.VideoCapture:
     return cv2.VideoCapture(src)
 
 
+def source_kind(src: str | Path | int) -> str:
+    """What :func:`open_source` opens ``src`` as: ``"camera"`` (an ``int`` or an integer
+    string), ``"stream"`` (a URL such as ``rtsp://…``) or ``"file"`` (a video file or an
+    image folder, the only kind that gives the same frames when opened again)."""
+    if isinstance(src, int) or (isinstance(src, str) and src.strip().isdigit()):
+        return "camera"
+    return "stream" if isinstance(src, str) and _URL.match(src) else "file"
+
+
 def open_source(
     src: str | Path | int, *, fps: float | None = None, threads: int | None = None
 ) -> FrameSource:
@@ -298,15 +307,16 @@ def open_source(
         raise ValueError(f"open_source: threads must be at least 1, got {threads}")
     if isinstance(src, bool):
         raise InputError(f"video source must be a path, camera index or URL, got {src!r}")
-    if isinstance(src, int) or (isinstance(src, str) and src.strip().isdigit()):
+    kind = source_kind(src)
+    if kind == "camera":
         index = int(src)
         cap = cv2.VideoCapture(index)
         if not cap.isOpened():
             cap.release()
             raise InputError(f"cannot open camera {index} (no such device or it is busy)")
         return CaptureSource(cap, str(index), "camera", fps)
-    if isinstance(src, str) and _URL.match(src):
-        cap = _capture(src, threads)
+    if kind == "stream":
+        cap = _capture(str(src), threads)
         if not cap.isOpened():
             cap.release()
             raise InputError(f"cannot open stream {src} (unreachable or unsupported)")

@@ -22,7 +22,6 @@ from mvtrack.config import RunSettings
 #: the statuses of a :class:`BatchItem`
 STATUSES: tuple[str, ...] = ("ok", "failed", "cancelled")
 
-_URL = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
 
 
 @dataclass
@@ -72,14 +71,12 @@ class BatchItem:
 # --------------------------------------------------------------------------- naming
 
 
-def _is_url(video: str) -> bool:
-    return bool(_URL.match(video))
-
-
 def normalise_video(video: str | os.PathLike[str]) -> str:
     """An absolute path for a local video (so remote workers see the same name); URLs unchanged."""
+    from mvtrack.io.video import source_kind
+
     text = os.fspath(video)
-    if _is_url(text):
+    if source_kind(text) == "stream":
         return text
     return str(Path(text).expanduser().absolute())
 

@@ -466,9 +466,9 @@ def track_video(
 def source_reader(video: str | int, fps: float | None) -> Callable[[], Iterable[Image]] | None:
     """Reads a file or image folder again (an offline run's drawing pass); None for a camera
     or a network stream, which give other frames when opened again."""
-    from mvtrack.io.video import open_source
+    from mvtrack.io.video import open_source, source_kind
 
-    if isinstance(video, int) or str(video).isdigit() or "://" in str(video):
+    if source_kind(video) != "file":
         return None
 
     def frames() -> Iterable[Image]:
