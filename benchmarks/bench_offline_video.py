@@ -32,19 +32,15 @@ from typing import Any
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_framerate as bf
+
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"
 VEHICLES = DATA / "vehicles"
 KITTI = DATA / "real" / "KITTI-17"
 CLIPS = {"US101-1": 3.0, "US101-2": 3.0, "US101-3": 3.0, "US101-4": 3.0}
-
-
-def subsample(rows: np.ndarray, k: int) -> np.ndarray:
-    """Rows (frame in column 0, from 1) of frames 1, 1+k, …, renumbered from 1."""
-    keep = (rows[:, 0] - 1) % k == 0
-    out = rows[keep].copy()
-    out[:, 0] = (out[:, 0] - 1) // k + 1
-    return out
 
 
 def frames_folder(images: Path, k: int, dest: Path) -> Path:
@@ -54,12 +50,6 @@ def frames_folder(images: Path, k: int, dest: Path) -> Path:
     for i, p in enumerate(files[::k]):
         os.symlink(p, dest / f"{i + 1:06d}{p.suffix.lower()}")
     return dest
-
-
-def _write(rows: np.ndarray, path: Path, columns: int) -> None:
-    with open(path, "w") as fh:
-        for r in rows:
-            fh.write(",".join(f"{v:g}" for v in r[:columns]) + "\n")
 
 
 def track(images: Path, fps: float, out: Path, offline: bool) -> dict[str, Any]:
@@ -74,23 +64,19 @@ def score_cars(clip: str, k: int, results: Path, work: Path) -> float:
     """F1 at IoU 0.5 by the clip's own scorer on the same frames."""
     seq = work / f"{clip}-seq-{k}"
     seq.mkdir(exist_ok=True)
-    for name, cols in (("boxes.txt", 10), ("static.txt", 5), ("still.txt", 5)):
-        src = VEHICLES / clip / name
-        rows = np.loadtxt(src, delimiter=",", ndmin=2) if src.stat().st_size else np.zeros((0, 5))
-        _write(subsample(rows, k), seq / name, cols)
+    for name in ("boxes.txt", "static.txt", "still.txt"):
+        bf.subsample(VEHICLES / clip / name, seq / name, k)
     out = subprocess.run([sys.executable, str(VEHICLES / "score_boxes.py"), str(seq),
                           str(results)], capture_output=True, text=True, check=True).stdout
     return float(out.splitlines()[0].split()[3])
 
 
 def score_people(k: int, results: Path, work: Path) -> tuple[float, float]:
-    """MOTA and IDF1 of KITTI-17 on the same frames."""
-    from mvtrack.eval.metrics import evaluate
-
+    """MOTA and IDF1 of KITTI-17 on the same frames (the sweep's rules)."""
     gt = work / f"kitti-gt-{k}.txt"
-    _write(subsample(np.loadtxt(KITTI / "gt.txt", delimiter=",", ndmin=2), k), gt, 10)
-    s = evaluate(gt, results, 0.5, ignore="drop", with_hota=False)
-    return float(s["MOTA"]), float(s["IDF1"])
+    bf.subsample(KITTI / "gt.txt", gt, k)
+    s = bf.score(gt, results)
+    return s["MOTA"], s["IDF1"]
 
 
 def run(ks: list[int]) -> dict[str, Any]:
