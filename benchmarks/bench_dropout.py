@@ -43,11 +43,6 @@ def drop_rows(src: Path, dst: Path, p: float, seed: int) -> None:
     dst.write_text("".join(line for line, k in zip(lines, keep, strict=True) if k))
 
 
-def best_peer(peers: dict[str, dict[str, float]]) -> dict[str, float]:
-    """The best peer's figure per metric (not necessarily one peer)."""
-    return {m: max(v[m] for v in peers.values()) for m in METRICS}
-
-
 def dropout(work: Path, python: str, runs: int, p: float, seed: int,
             changes: dict[str, Any] | None = None) -> dict[str, Any]:
     """Every sweep cell ``runs`` times with detections dropped; mvtrack and the peers."""
@@ -65,7 +60,7 @@ def dropout(work: Path, python: str, runs: int, p: float, seed: int,
                         "peers": peers})
             print(f"{cell['seq']} k={cell['k']} seed {seed + r}: online "
                   f"{ours['online']['MOTA']:.3f} / {ours['online']['IDF1']:.3f}, best peer "
-                  f"{best_peer(peers)['MOTA']:.3f} / {best_peer(peers)['IDF1']:.3f}",
+                  f"{bf.best_peer(peers)['MOTA']:.3f} / {bf.best_peer(peers)['IDF1']:.3f}",
                   file=sys.stderr, flush=True)
     return {"runs": runs, "drop": p, "seed": seed, "changes": changes or {}, "rows": out}
 
@@ -77,7 +72,7 @@ def summarise(res: dict[str, Any]) -> list[dict[str, Any]]:
         cells.setdefault((row["seq"], row["k"]), []).append(row)
     out = []
     for (seq, k), rows in cells.items():
-        best = [best_peer(r["peers"]) for r in rows]
+        best = [bf.best_peer(r["peers"]) for r in rows]
         entry: dict[str, Any] = {
             "seq": seq, "k": k, "peer": {m: float(np.mean([b[m] for b in best])) for m in METRICS}}
         for mode in bf.MODES:

@@ -99,6 +99,11 @@ def score(gt: Path, results: Any) -> dict[str, float]:
     return {k: float(s[k]) for k in ("MOTA", "IDF1", "IDSW", "FP", "FN")}
 
 
+def best_peer(peers: dict[str, dict[str, float]]) -> dict[str, float]:
+    """The best peer's figure per metric (not necessarily one peer)."""
+    return {m: max(v[m] for v in peers.values()) for m in ("MOTA", "IDF1")}
+
+
 def run_mvtrack(cell: dict[str, Any], changes: dict[str, Any] | None = None,
                 offline: dict[str, bool] | None = None) -> dict[str, dict[str, float]]:
     """mvtrack online and offline on one cell, scored. ``changes`` are fields of
@@ -187,7 +192,7 @@ def sweep(work: Path, python: str | None, previous: Path | None = None,
         if python:
             peers = run_peers(python, cell)
             row["peers"] = peers
-            row["best"] = {m: max(p[m] for p in peers.values()) for m in ("MOTA", "IDF1")}
+            row["best"] = best_peer(peers)
             row["best_of"] = {m: max(peers, key=lambda n, m=m: peers[n][m])
                               for m in ("MOTA", "IDF1")}
         else:
