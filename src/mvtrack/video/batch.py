@@ -74,6 +74,19 @@ def _quiet_logs(level: int = logging.ERROR) -> Iterator[None]:
             lg.setLevel(old)
 
 
+def _silence_interrupted_loop() -> None:
+    """After Ctrl-C or SIGTERM: only critical messages from distributed's event loop.
+
+    An interrupt that lands inside distributed's ``sync()`` before it has bound its future
+    makes the cancel callback it scheduled fail on the loop thread (``NameError: cannot
+    access free variable 'future'``, distributed 2026.8), and tornado logs that with its
+    traceback. The batch has already stopped by then; the user should see one error line.
+    Not undone: the loop thread may run the callback after the batch has returned.
+    """
+    for name in ("tornado.application", "distributed.utils"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
 def _summary(
     items: list[BatchItem], *, workers: int | None, scheduler: str | None, seconds: float,
     settings: RunSettings, interrupted: bool,
@@ -224,6 +237,7 @@ def track_many(
                         on_result(items[i])
             except KeyboardInterrupt:
                 interrupted = True
+                _silence_interrupted_loop()
                 # the videos being tracked stop at their next frame and write what they
                 # tracked; those not started return at once
                 with contextlib.suppress(Exception):
@@ -240,6 +254,8 @@ def track_many(
     except KeyboardInterrupt:  # while starting or closing the cluster
         interrupted = True
     finally:
+        if interrupted:  # again: leaving _quiet_logs restored the levels
+            _silence_interrupted_loop()
         bar.close()
         for i, it in enumerate(items):
             if it.status == "pending":
