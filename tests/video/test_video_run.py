@@ -533,6 +533,51 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
         StoppedVehicleRescuer(inner, tracker, max_shift=0.0)
 
 
+def test_could_stand_by_hand() -> None:
+    """``|v_a| Δk ≤ s_a / 2`` on both axes, by hand; NaN velocity passes."""
+    from mvtrack.video.rescue import could_stand
+
+    v = np.array([[9.0, 0.0], [11.0, 0.0], [0.0, 6.0], [4.0, 1.0], [np.nan, np.nan]])
+    frames = np.array([2, 1, 1, 3, 5])
+    size = np.array([[40.0, 10.0], [20.0, 10.0], [40.0, 10.0], [40.0, 10.0], [4.0, 4.0]])
+    # 18 ≤ 20; 11 > 10; 6 > 5; 12 ≤ 20 and 3 ≤ 5; no evidence
+    assert could_stand(v, frames, size).tolist() == [True, False, False, True, True]
+
+
+def test_a_vehicle_missed_while_it_drives_on_is_not_held_where_it_was_last_seen() -> None:
+    """With a real tracker and a stand-in search that finds every vehicle where it was last
+    measured (as the empty road matches the template of a car of the road's colour): the
+    car that stood before it was missed is held (``STOPPED``); the one missed while driving
+    50 px a frame at 3 fps, more than half its 80 px box, is not (it coasts, no row)."""
+    from mvtrack.tracking import Tracker, TrackerConfig
+    from mvtrack.types import TrackState
+    from mvtrack.video import StoppedVehicleRescuer
+
+    class FindsAll:
+        def search(self, image):
+            return lambda uids, xy, wh: (np.ones(len(uids), bool), np.array(xy),
+                                         np.full(len(uids), 0.9))
+
+        def observe(self, image, dets, tracks):
+            pass
+
+    n = 12
+    driving = np.column_stack([50.0 + 50.0 * np.arange(n), np.full(n, 100.0)])
+    standing = np.column_stack([np.minimum(50.0 + 2.0 * np.arange(n), 60.0), np.full(n, 300.0)])
+    tracker = Tracker(TrackerConfig(fps=3.0))
+    guard = StoppedVehicleRescuer(FindsAll(), tracker, max_shift=4.0)
+    image = np.zeros((10, 10, 3), np.uint8)
+    for k in range(n - 1):
+        dets = Detections(k, [driving[k], standing[k]], [[80.0, 40.0]] * 2)
+        tracker.step(dets, rescue=guard.callback(image, dets))
+    missed = Detections.empty(n - 1)
+    out = tracker.step(missed, rescue=guard.callback(image, missed))
+    state = dict(zip(np.round(out.filtered_xy[:, 1]).astype(int).tolist(),
+                     out.state.tolist(), strict=True))
+    assert state[300] == int(TrackState.STOPPED)
+    assert state.get(100) != int(TrackState.STOPPED)  # no row: it coasts unseen
+
+
 class _Bank:
     """A stand-in template bank: each track's template box (centre x, y, w, h)."""
 

@@ -193,6 +193,12 @@ class Tracker:
         return len(self.tracks)
 
     @property
+    def steps(self) -> int:
+        """Frames processed so far: the step number of the frame being processed (the unit of
+        the tracks' ``last_k``)."""
+        return self._k
+
+    @property
     def n_ids(self) -> int:
         """Public IDs handed out so far."""
         return self._next_id - 1

@@ -76,6 +76,32 @@ def held_scores(
     return HeldScores(ids[ok], np.minimum(scores[order][pos][ok], 1.0))
 
 
+def could_stand(velocity: FloatArray, frames: Any, size: FloatArray) -> NDArray[np.bool_]:
+    r"""Whether each vehicle can be standing where it was last measured.
+
+    Its filter's velocity ``v`` (px/frame) over the ``Δk`` frames since that measurement would
+    carry it ``v Δk``; it still covers that place if, on each axis,
+
+    .. math:: |v_a| \, Δk \le s_a / 2
+
+    (its last measured centre still inside its box of size ``s``). A vehicle that slowed down
+    and stopped passes (``v`` came to rest with it); one missed while it drives on does not,
+    and the template match at its last place is the road it left. No new constant: the
+    vehicle's own size and speed decide.
+
+    Parameters
+    ----------
+    velocity : (K, 2)
+        The tracks' velocities, px/frame (NaN: no evidence, it passes).
+    frames : (K,) int
+        Frames since each track's last measurement (at least 1 when it missed this one).
+    size : (K, 2)
+        The vehicles' box sizes ``(w, h)``, px.
+    """
+    travel = np.abs(np.asarray(velocity, np.float64)) * np.asarray(frames, np.float64)[:, None]
+    return ~(travel > np.asarray(size, np.float64) / 2).any(axis=1)  # NaN compares False
+
+
 def standing_uids(tracker: Any, tracks: TrackFrame) -> IntArray:
     """The internal uids (sorted) of the rows of ``tracks`` whose track stands: the filter's
     speed is below the box's shorter side per second (``speed · fps < min(w, h)``, the
@@ -123,10 +149,14 @@ class StoppedVehicleRescuer:
     - a duplicate track (two blobs of one two-tone vehicle) whose detection went to its twin
       follows the moving vehicle by template, frame after frame.
 
+    - a vehicle of the road's colour, missed for a frame while it drives on, leaves the road
+      behind it, which matches its template at its last place: the track stands as a ghost.
+
     So the search is centred on the track's last measured position, a match is accepted only
     if it lies within ``max_shift`` px of it (a stopped vehicle stands where it was last seen),
-    and no detection of this frame covers the match (a detected object has not faded). All
-    checks are array operations over the missed tracks.
+    the track's velocity since then would not have carried its box off that place
+    (:func:`could_stand`), and no detection of this frame covers the match (a detected object
+    has not faded). All checks are array operations over the missed tracks.
 
     Parameters
     ----------
@@ -192,6 +222,9 @@ class StoppedVehicleRescuer:
             if again.any():
                 f2, xy2, s2 = self._search(search, uids[again], last[again], wh[again])
                 found[again], xy[again], score[again] = f2, xy2, s2
+            # and it must have been able to stop there: a vehicle missed while it drives on
+            # (one of the road's colour) leaves the road behind it to match its template
+            found &= self._could_stand(tab, at, uids, wh)
             if not found.any():
                 return found, xy
             # and no detection of about its size may cover it (a detected object has not
@@ -216,6 +249,25 @@ class StoppedVehicleRescuer:
             return found, xy
 
         return rescue
+
+    def _could_stand(self, tab: Any, at: IntArray, uids: IntArray, wh: Any
+                     ) -> NDArray[np.bool_]:
+        """:func:`could_stand` for the tracks at rows ``at`` of ``tab``: their filters'
+        velocities, the frames since their last measurement, the larger of their box and their
+        template's (the vehicle's last full-size box; a fading vehicle's blob shrinks). True
+        for all of them with a tracker that does not give these."""
+        tr = self.tracker
+        predictor, state = getattr(tr, "predictor", None), getattr(tr, "pstate", None)
+        steps = getattr(tr, "steps", None)
+        if predictor is None or state is None or steps is None:
+            return np.ones(at.size, bool)
+        velocity = np.asarray(predictor.velocity(state), np.float64)[at]
+        size = np.asarray(wh, np.float64).reshape(-1, 2)
+        bank = getattr(self.inner, "bank", None)
+        if bank is not None and hasattr(bank, "boxes"):
+            template = bank.boxes(uids)[:, 2:]
+            size = np.where(np.isfinite(template), np.maximum(template, size), size)
+        return could_stand(velocity, steps - tab.last_k[at], size)
 
     def fragments(self, image: Image, dets: Detections) -> NDArray[np.bool_]:
         """The detections of this frame that belong to a vehicle that stands: to be left out
