@@ -210,21 +210,19 @@ class StoppedVehicleRescuer:
         def rescue(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any]:
             search = self.inner.search(image)  # only on frames with missed tracks
             uids = np.asarray(uids, np.int64).reshape(-1)
-            # a stopped vehicle stands where it was last measured: search around that place,
-            # not around the prediction, which keeps drifting with the last velocity estimate
+            wh = np.asarray(wh, np.float64).reshape(-1, 2)
             order = np.argsort(tab.uid)
             at = order[np.searchsorted(tab.uid[order], uids)]
-            last = tab.last_xy[at]
-            centre = self._centres(uids, last)
-            found, xy, score = self._search(search, uids, centre, wh, image)
-            # not at its template's place: where it was last measured
-            again = ~found & (centre != last).any(axis=1)
-            if again.any():
-                f2, xy2, s2 = self._search(search, uids[again], last[again], wh[again])
-                found[again], xy[again], score[again] = f2, xy2, s2
-            # and it must have been able to stop there: a vehicle missed while it drives on
-            # (one of the road's colour) leaves the road behind it to match its template
-            found &= self._could_stand(tab, at, uids, wh)
+            box = self._template_boxes(uids)
+            found = np.zeros(uids.size, bool)
+            xy = np.full((uids.size, 2), np.nan)
+            score = np.full(uids.size, np.nan)
+            # only a vehicle that could have stopped is searched: one missed while it drives
+            # on (of the road's colour) leaves the road behind it to match its template
+            can = np.flatnonzero(self._could_stand(tab, at, wh, box))
+            if can.size:
+                found[can], xy[can], score[can] = self._find(
+                    search, uids[can], tab.last_xy[at[can]], box[can], wh[can], image)
             if not found.any():
                 return found, xy
             # and no detection of about its size may cover it (a detected object has not
@@ -236,13 +234,13 @@ class StoppedVehicleRescuer:
             if len(dets) and found.any():
                 lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
                 inside = ((xy[:, None, :] >= lo[None]) & (xy[:, None, :] <= hi[None])).all(2)
-                area = np.asarray(wh, np.float64).reshape(-1, 2).prod(axis=1)
+                area = wh.prod(axis=1)
                 merged = dets.wh.prod(axis=1)[None, :] > self.MERGED * area[:, None]
                 bank = getattr(self.inner, "bank", None)
                 stood = (tab.state[at] == int(TrackState.STOPPED)
                          if self.pieces and hasattr(bank, "boxes") else np.zeros(uids.size, bool))
                 if stood.any():
-                    merged[stood] |= ~self._within(bank.boxes(uids[stood]), dets)
+                    merged[stood] |= ~self._within(box[stood], dets)
                 found &= ~(inside & ~merged).any(axis=1)
             xy[~found] = np.nan
             self._accepted = (uids[found], score[found])
@@ -250,23 +248,43 @@ class StoppedVehicleRescuer:
 
         return rescue
 
-    def _could_stand(self, tab: Any, at: IntArray, uids: IntArray, wh: Any
+    def _find(self, search: RescueFn, uids: IntArray, last: FloatArray, box: FloatArray,
+              wh: FloatArray, image: Image) -> tuple[NDArray[np.bool_], FloatArray, FloatArray]:
+        """The search of :meth:`callback`: around where each vehicle was last seen
+        (:meth:`_centres`), and around its last measurement where that place differs and the
+        vehicle is not found there."""
+        # a stopped vehicle stands where it was last measured: search around that place,
+        # not around the prediction, which keeps drifting with the last velocity estimate
+        centre = self._centres(last, box)
+        found, xy, score = self._search(search, uids, centre, wh, image)
+        again = ~found & (centre != last).any(axis=1)
+        if again.any():
+            f2, xy2, s2 = self._search(search, uids[again], last[again], wh[again])
+            found[again], xy[again], score[again] = f2, xy2, s2
+        return found, xy, score
+
+    def _template_boxes(self, uids: IntArray) -> FloatArray:
+        """(K, 4) the template bank's box of each track (centre x, y, w, h; NaN without one,
+        and for all of them with a bank that keeps no boxes)."""
+        bank = getattr(self.inner, "bank", None)
+        if bank is None or not hasattr(bank, "boxes"):
+            return np.full((uids.size, 4), np.nan)
+        return np.asarray(bank.boxes(uids), np.float64)
+
+    def _could_stand(self, tab: Any, at: IntArray, wh: FloatArray, box: FloatArray
                      ) -> NDArray[np.bool_]:
         """:func:`could_stand` for the tracks at rows ``at`` of ``tab``: their filters'
-        velocities, the frames since their last measurement, the larger of their box and their
-        template's (the vehicle's last full-size box; a fading vehicle's blob shrinks). True
-        for all of them with a tracker that does not give these."""
+        velocities, the frames since their last measurement, the larger of their box ``wh``
+        and their template's ``box`` (the vehicle's last full-size box; a fading vehicle's
+        blob shrinks). True for all of them with a tracker that does not give these."""
         tr = self.tracker
         predictor, state = getattr(tr, "predictor", None), getattr(tr, "pstate", None)
         steps = getattr(tr, "steps", None)
         if predictor is None or state is None or steps is None:
             return np.ones(at.size, bool)
         velocity = np.asarray(predictor.velocity(state), np.float64)[at]
-        size = np.asarray(wh, np.float64).reshape(-1, 2)
-        bank = getattr(self.inner, "bank", None)
-        if bank is not None and hasattr(bank, "boxes"):
-            template = bank.boxes(uids)[:, 2:]
-            size = np.where(np.isfinite(template), np.maximum(template, size), size)
+        template = box[:, 2:]
+        size = np.where(np.isfinite(template), np.maximum(template, wh), wh)
         return could_stand(velocity, steps - tab.last_k[at], size)
 
     def fragments(self, image: Image, dets: Detections) -> NDArray[np.bool_]:
@@ -366,7 +384,7 @@ class StoppedVehicleRescuer:
                 found[rest] &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
         return found, xy, score
 
-    def _centres(self, uids: IntArray, last: NDArray[np.float64]) -> NDArray[np.float64]:
+    def _centres(self, last: FloatArray, box: FloatArray) -> FloatArray:
         """Where each missed track's vehicle was last seen: the centre of its template's box
         when its last measurement lies inside that box, else the last measurement.
 
@@ -376,11 +394,9 @@ class StoppedVehicleRescuer:
         vehicle's centre (6 px of a 16 px vehicle in ``intersection``). The template keeps
         the vehicle's last full-size box, so the match lies at that box's centre, farther than
         ``max_shift`` from the last fragment: searched around the fragment it was refused.
+        ``box`` (K, 4): the templates' boxes (:meth:`_template_boxes`; NaN: the last
+        measurement).
         """
-        bank = getattr(self.inner, "bank", None)
-        if bank is None or not hasattr(bank, "boxes"):
-            return last
-        box = bank.boxes(uids)
         # within one box length of the box (a fragment at its edge, or a detection of a
         # vehicle passing close by that the stopped track took for one frame)
         reach = box[:, 2:] / 2 + box[:, 2:].max(axis=1, keepdims=True)
