@@ -214,15 +214,13 @@ class StoppedVehicleRescuer:
             order = np.argsort(tab.uid)
             at = order[np.searchsorted(tab.uid[order], uids)]
             box = self._template_boxes(uids)
-            found = np.zeros(uids.size, bool)
-            xy = np.full((uids.size, 2), np.nan)
-            score = np.full(uids.size, np.nan)
-            # only a vehicle that could have stopped is searched: one missed while it drives
-            # on (of the road's colour) leaves the road behind it to match its template
-            can = np.flatnonzero(self._could_stand(tab, at, wh, box))
-            if can.size:
-                found[can], xy[can], score[can] = self._find(
-                    search, uids[can], tab.last_xy[at[can]], box[can], wh[can], image)
+            # every missed track is searched, the ones that cannot stand too: the bank cuts a
+            # template from its kept frame only when it is searched (the next frame's search
+            # of a track that slowed down needs it)
+            found, xy, score = self._find(search, uids, tab.last_xy[at], box, wh, image)
+            # and it must have been able to stop there: a vehicle missed while it drives on
+            # (one of the road's colour) leaves the road behind it to match its template
+            found &= self._could_stand(tab, at, wh, box)
             if not found.any():
                 return found, xy
             # and no detection of about its size may cover it (a detected object has not
