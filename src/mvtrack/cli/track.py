@@ -129,10 +129,7 @@ def register(app: typer.Typer) -> None:
             assign=assign, detector=detector, no_video=no_video, no_templates=no_templates,
             score_high=score_high, min_score=min_score, fps=fps, coasting=coasting,
         )
-        if offline:
-            if flush is not None:
-                raise InputError("--offline revises rows after the last frame: it cannot "
-                                 "stream (--flush)")
+        if offline:  # with --flush refused by track_to_folder, before any frame is read
             settings = dataclasses.replace(settings, offline=True)
         with run_folder(out, force=force, inputs=[video], kind="track"):
             run = track_video(video, out, settings, fps=settings.frame_rate,
