@@ -19,7 +19,8 @@ ROOT = Path(__file__).resolve().parents[1]
 #: fragments in reading order: the summary, the development benchmark (the frame-rate sweep,
 #: its rules and defaults), then from the filters up to whole videos
 ORDER = (
-    "summary", "framerate", "rules", "defaults", "joint", "dropout", "filters", "association",
+    "summary", "framerate", "heldout", "rules", "defaults", "joint", "dropout", "filters",
+    "association",
     "tracker", "numpy-floor", "mot15", "tud", "pipeline", "frontend", "vehicles", "analytics",
     "structured", "sim", "batch",
 )

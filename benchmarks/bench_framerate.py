@@ -34,6 +34,8 @@ Usage::
         --previous-src /tmp/previous --previous-label " (e15da75)" --out ... --json ...
     python benchmarks/bench_framerate.py --rules --out docs/bench/rules.md
     python benchmarks/bench_framerate.py --loo --out docs/bench/defaults.md
+    python benchmarks/bench_framerate.py --ks 5 6 8 --peers-python /work/peers/bin/python \\
+        --out docs/bench/heldout.md --json benchmarks/data/heldout.json   # frame rates held out
 """
 
 from __future__ import annotations
@@ -78,11 +80,12 @@ def subsample(src: Path, dst: Path, k: int) -> None:
                 fo.write(f"{(f - 1) // k + 1},{rest}")
 
 
-def cells(work: Path, seqs: dict[str, float] | None = None) -> list[dict[str, Any]]:
+def cells(work: Path, seqs: dict[str, float] | None = None,
+          ks: tuple[int, ...] = KS) -> list[dict[str, Any]]:
     """The sweep's cells: sequence, k, frame rate and the subsampled files."""
     out = []
     for seq, fps in (seqs or SEQUENCES).items():
-        for k in KS:
+        for k in ks:
             d = work / f"{seq}-{k}"
             d.mkdir(parents=True, exist_ok=True)
             subsample(DATA / seq / "det.txt", d / "det.txt", k)
@@ -174,17 +177,18 @@ def recorded_best() -> dict[tuple[str, int], dict[str, float]]:
 
 
 def sweep(work: Path, python: str | None, previous: Path | None = None,
-          previous_recorded: Path | None = None) -> dict[str, Any]:
+          previous_recorded: Path | None = None, ks: tuple[int, ...] = KS) -> dict[str, Any]:
     """Every cell: mvtrack online and offline, the peers, the best peer per metric, and an
     earlier version's offline run (run from its checkout ``previous``, or as recorded in the
-    JSON ``previous_recorded``)."""
+    JSON ``previous_recorded``). ``ks`` other than the sweep's (frame rates held out from the
+    choice of the defaults) need the peers run (``python``)."""
     recorded = recorded_best()
     prev_rec = {}
     if previous_recorded is not None:
         prev_rec = {(r["seq"], r["k"]): r["previous"]
                     for r in json.loads(previous_recorded.read_text())["cells"]}
     result = []
-    for cell in cells(work):
+    for cell in cells(work, ks=ks):
         row: dict[str, Any] = {"seq": cell["seq"], "k": cell["k"], "fps": cell["fps"]}
         t0 = time.perf_counter()
         row.update(run_mvtrack(cell))
@@ -218,7 +222,11 @@ def report(res: dict[str, Any], command: str, previous_label: str = "") -> str:
     """The sweep as Markdown."""
     rows = res["cells"]
     prev = all("previous" in r for r in rows)
-    lines = ["## The frame-rate sweep: mvtrack beside the peers", "",
+    held = sorted({r["k"] for r in rows} - set(KS))
+    title = ("## The frame-rate sweep: mvtrack beside the peers" if not held else
+             "## Frame rates held out: mvtrack beside the peers at k = "
+             + ", ".join(map(str, held)))
+    lines = [title, "",
              f"Command: `{command}`", "",
              "Each development sequence with every k-th frame kept (frames renumbered, "
              "`--fps fps/k`), the same files for every tracker, scored with peerbench's rules "
@@ -529,8 +537,20 @@ def main(argv: list[str] | None = None) -> int:
                     help="a JSON of an earlier --previous-src run (its figures reused)")
     ap.add_argument("--previous-label", default="",
                     help="how the earlier version is named in the table, e.g. ' (e15da75)'")
+    ap.add_argument("--ks", type=int, nargs="+", default=list(KS),
+                    help="keep every k-th frame for each k given (default 1 2 3 4, the sweep; "
+                    "others are frame rates held out from the defaults' choice and need "
+                    "--peers-python)")
     args = parse_args(ap, argv)
     if args is None:
+        return 2
+    ks = tuple(args.ks)
+    if min(ks) < 1:
+        print(f"error: --ks must be positive frame steps, got {min(ks)}", file=sys.stderr)
+        return 2
+    if not set(ks) <= set(KS) and not args.peers_python:
+        print("error: --ks beyond 1 2 3 4 has no recorded peers: give --peers-python",
+              file=sys.stderr)
         return 2
     command = "python benchmarks/bench_framerate.py " + shlex.join(argv or sys.argv[1:])
     with tempfile.TemporaryDirectory() as tmp:
@@ -542,7 +562,7 @@ def main(argv: list[str] | None = None) -> int:
             res = loo(work)
             text = loo_report(res, command)
         else:
-            res = sweep(work, args.peers_python, args.previous_src, args.previous)
+            res = sweep(work, args.peers_python, args.previous_src, args.previous, ks)
             text = report(res, command, args.previous_label)
     emit(text, res, args.out, args.json)
     return 0
