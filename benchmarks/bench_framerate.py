@@ -25,6 +25,9 @@ dropped), by :mod:`mvtrack.eval`, which equals peerbench's ``metrics.py``
   sequence), the value of each setting that does best on the other cells, and how the fold's
   choices score on the held-out cells.
 
+``--ks 5 6 8`` runs the sweep at frame rates that no default was chosen on (a check of the
+sweep itself; the peers are run, since ``sweep-best-peers.tsv`` records k = 1–4 only).
+
 Usage::
 
     python benchmarks/bench_framerate.py --peers-python /work/peers/bin/python \\
@@ -547,6 +550,10 @@ def main(argv: list[str] | None = None) -> int:
     ks = tuple(args.ks)
     if min(ks) < 1:
         print(f"error: --ks must be positive frame steps, got {min(ks)}", file=sys.stderr)
+        return 2
+    if ks != KS and (args.rules or args.loo):
+        print("error: --ks applies to the sweep, not to --rules or --loo (they use k = 1 2 3 4)",
+              file=sys.stderr)
         return 2
     if not set(ks) <= set(KS) and not args.peers_python:
         print("error: --ks beyond 1 2 3 4 has no recorded peers: give --peers-python",
