@@ -174,6 +174,22 @@ def test_gates_are_drawn_only_for_the_confirmed_tracks_with_a_box() -> None:
     assert list(shown_gates(gates, tf).track_id) == [4, 7]
 
 
+def test_a_relinked_track_keeps_its_gate_under_its_shown_id() -> None:
+    # the tracker's track 9 is shown as 2 (relinked to an ended track); 5 is shown as itself
+    gates = GateRegions(uid=np.arange(3), track_id=np.array([9, 5, -1], np.int64),
+                        center=np.array([[20.0, 20.0], [50.0, 50.0], [0.0, 0.0]]),
+                        shape=np.broadcast_to(np.eye(2), (3, 2, 2)).copy(), r2=9.21)
+    tf = _frame(0, [2, 5], [1, 1], [[20, 20], [50, 50]])
+    assert list(shown_gates(gates, tf).track_id) == [5]  # the IDs compared as they are
+
+    def shown(ids: np.ndarray) -> np.ndarray:
+        return np.where(ids == 9, 2, ids)
+
+    g = shown_gates(gates, tf, shown)
+    assert list(g.track_id) == [2, 5]
+    np.testing.assert_array_equal(g.center, [[20, 20], [50, 50]])
+
+
 def test_annotate_frame_leaves_input_untouched_and_draws() -> None:
     frame = np.full((60, 80, 3), 40, np.uint8)
     tf = _frame(0, [1], [TrackState.CONFIRMED], [[40, 30]])

@@ -239,7 +239,8 @@ def track_to_folder(
                 return
             gates: dict[str, Any] = {}
             if with_gates:  # the next frame's gates of the confirmed tracks drawn
-                g = shown_gates(tracker.gates(), tracks)
+                g = shown_gates(tracker.gates(), tracks,
+                                None if relinker is None else relinker.shown)
                 gates = {"gate_center": g.center, "gate_cov": g.shape, "gate_r2": g.r2}
             text = [f"frame {k}  tracks {len(tracks)}", label]
             img = annotate_frame(image, tracks, trails=trails, text=text, **gates)

@@ -15,8 +15,9 @@ of paper 1 §1.1) with ``C = I``, an axis-aligned ellipse for the uncoupled gate
 
 from __future__ import annotations
 
+import dataclasses
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import cv2
 import numpy as np
@@ -151,9 +152,18 @@ def draw_gates(
     return image
 
 
-def shown_gates(gates: GateRegions, tracks: TrackFrame) -> GateRegions:
+def shown_gates(gates: GateRegions, tracks: TrackFrame,
+                shown_ids: Callable[[NDArray[np.int64]], NDArray[np.int64]] | None = None,
+                ) -> GateRegions:
     """The gates worth drawing: those of confirmed tracks (``track_id > 0``) with a box in
-    ``tracks``, so that every drawn ellipse belongs to a drawn box."""
+    ``tracks``, so that every drawn ellipse belongs to a drawn box.
+
+    ``shown_ids`` maps the tracker's IDs to the IDs ``tracks`` show, where they differ (the
+    video's relinking, :meth:`mvtrack.video.relink.Relinker.shown`): a relinked track keeps
+    its gate, under its shown ID.
+    """
+    if shown_ids is not None:
+        gates = dataclasses.replace(gates, track_id=shown_ids(gates.track_id))
     shown = np.isfinite(np.hstack([tracks.filtered_xy, tracks.wh])).all(axis=1)
     return gates.take((gates.track_id > 0) & np.isin(gates.track_id, tracks.track_id[shown]))
 
