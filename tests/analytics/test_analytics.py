@@ -236,6 +236,41 @@ def test_incomplete_is_reported_and_heading_completes_mid_intersection():
     assert tr["status"].tolist() == ["completed", "incomplete"]
 
 
+def test_fragments_of_one_track_are_joined_before_counting():
+    """A left turn lost mid-turn (4 frames) and restarted: one movement, not two straight
+    ones; a track in the opposite direction that starts where another ended is not joined,
+    nor one that overlaps it in time."""
+    s = settings_from_dict(x5_settings())
+    ang = np.radians(np.linspace(0.0, 90.0, 40))
+    w_in = np.column_stack([np.arange(0.0, 150.0, 2.5), np.full(60, 135.0)])
+    turn = np.vstack([w_in, np.column_stack([150 + 20 * np.sin(ang),
+                                             135 - 20 * (1 - np.cos(ang))])])
+    north = np.column_stack([np.full(50, 170.0), 95 - 2.5 * np.arange(50.0)])
+    path = np.vstack([turn, north])
+    frames = np.arange(len(path))
+    cut = (frames < 70) | (frames >= 74)  # lost for 4 frames in the turn
+    first, second = cut & (frames < 70), cut & (frames >= 74)
+    pts = TrackPoints.from_arrays(np.concatenate([frames[first], frames[second]]),
+                                  np.r_[np.full(first.sum(), 1), np.full(second.sum(), 2)],
+                                  np.vstack([path[first], path[second]]),
+                                  np.full((cut.sum(), 2), 12.0))
+    res = analyse(pts, s, 30.0)
+    assert res.extra["joined"] == {2: 1}
+    assert res.tracks["track_id"].tolist() == [1]
+    assert res.tracks["joined"].tolist() == ["2"]  # traceable to the tracker's IDs
+    assert res.tracks["origin"].tolist() == ["W"] and res.tracks["destination"].tolist() == ["N"]
+    assert res.tracks["status"].tolist() == ["complete"]
+    # back the way it came, from where the first ended: another object
+    back = np.column_stack([150 - 2.5 * np.arange(60.0), np.full(60, 135.0)])
+    res = analyse(TrackPoints.from_arrays(
+        np.r_[np.arange(60), np.arange(62, 122)], np.r_[np.full(60, 1), np.full(60, 2)],
+        np.vstack([w_in, back]), np.full((120, 2), 12.0)), s, 30.0)
+    assert res.extra["joined"] == {}
+    # overlapping in time: two objects
+    res = analyse(_tracks({1: w_in, 2: np.add(w_in[40:], [0.0, 30.0])}), s, 30.0)
+    assert res.extra["joined"] == {}
+
+
 # ---------------------------------------------------------------------- settings
 @pytest.mark.parametrize("text, key", [
     ("[analytics]\nintervall = 5", "analytics.intervall"),

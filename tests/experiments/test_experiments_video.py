@@ -163,11 +163,6 @@ def test_intersection_report(monkeypatch) -> None:
     assert any(r[0].startswith("counting module") for r in rep.rows)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "the default tracker's counts on X5 are 15/5/0/2 (straight/left/right/waiting) against "
-    "paper 1's 11/6/1/2: the right-turning car (a 15 px arc at up to 3 px/frame, about 10 g) "
-    "and one left-turning car lose their tracks at the turn, and each piece of a lost turn "
-    "counts as a straight movement; see docs/experiments/README.md"))
 def test_intersection_default_counts_are_paper_1s(monkeypatch) -> None:
     from mvtrack.experiments import intersection as x5
 

@@ -13,6 +13,10 @@ has not shown where it goes, and one that cannot be completed (it stands still, 
 meets no approach) is ``incomplete``, the unknown end named :data:`UNKNOWN`: it is reported,
 never dropped.
 
+Before any of this, the fragments of one object's track are joined (:func:`join_fragments`):
+a tracker that loses an object for a few frames and restarts it would otherwise count it twice,
+each piece completed along its own heading (a turn read as two straight movements).
+
 With a single visit, whether it is the origin or the destination follows from where the
 track is there: born in it (origin), ended in it (destination), or else from the direction
 of travel relative to the intersection centre (towards it: origin).
@@ -57,6 +61,12 @@ class MovementSettings:
         Largest change of heading along an extrapolated path, degrees.
     centre : (2,) float64 or None
         Intersection centre, px (default: the mean of the approaches' centroids).
+    join : float
+        Longest gap, seconds, between a track's end and another's start that
+        :func:`join_fragments` bridges (0: tracks are never joined).
+    join_radius : float
+        How far, in box sizes, the start of the next fragment may lie from where the end of
+        the first one leads (and the reverse) for them to be joined.
     """
 
     horizon: float = 3.0
@@ -65,6 +75,8 @@ class MovementSettings:
     min_speed: float = 0.2
     max_turn: float = 100.0
     centre: tuple[float, float] | None = None
+    join: float = 0.5
+    join_radius: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -105,6 +117,82 @@ class TrackMovements:
         for (o, d), name in self.turn_of.items():  # a few approach pairs
             out[(self.origin == o) & (self.destination == d)] = name
         return out.astype(str)
+
+
+def join_fragments(
+    tracks: TrackPoints, fps: float, settings: MovementSettings | None = None,
+) -> tuple[TrackPoints, dict[int, int]]:
+    """Join the fragments of one object's track before anything is counted.
+
+    A tracker that loses an object for a few frames (a turn it did not follow, a start after
+    a stand) ends its track and starts another: counted apart, each fragment is a movement of
+    its own, its missing end completed from its heading. Here the track ``b`` that starts
+    ``1 .. join · fps`` frames after track ``a`` ends continues ``a`` when each end leads to
+    the other: ``a``'s last position carried on with its mean velocity (over the ``window``)
+    for the gap lands within ``join_radius`` box sizes of ``b``'s first, and ``b``'s first
+    carried back with its velocity lands as near ``a``'s last, and, where both move, the
+    heading turns by at most ``max_turn`` from one to the other. The pairs are taken one to one,
+    nearest first; ``b``'s rows then carry ``a``'s ID (chains of fragments the first one's).
+    Tracks that overlap in time are never joined: they are two objects.
+
+    Returns the joined rows and ``{joined ID: ID it now carries}``.
+    """
+    st = MovementSettings() if settings is None else settings
+    g = round(st.join * fps)
+    t_n = tracks.n_tracks
+    if g < 1 or t_n < 2:
+        return tracks, {}
+    start_row, end_row = tracks.starts[:-1], tracks.starts[1:] - 1
+    half = max(1, round(st.window * fps))
+    vmean, _ = local_mean(tracks.frame, tracks.track_id, tracks.velocity, half)
+    vmean = np.nan_to_num(vmean)
+    f_end, f_start = tracks.frame[end_row], tracks.frame[start_row]
+    by_start = np.argsort(f_start, kind="stable")
+    lo = np.searchsorted(f_start[by_start], f_end + 1)
+    hi = np.searchsorted(f_start[by_start], f_end + g, side="right")
+    n = hi - lo
+    a = np.repeat(np.arange(t_n), n)
+    b = by_start[np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + np.repeat(lo, n)]
+    if a.size == 0:
+        return tracks, {}
+    dt = (f_start[b] - f_end[a]).astype(np.float64)[:, None]
+    pa, pb = tracks.xy[end_row[a]], tracks.xy[start_row[b]]
+    fwd = np.linalg.norm(pb - (pa + vmean[end_row[a]] * dt), axis=1)
+    bwd = np.linalg.norm(pa - (pb - vmean[start_row[b]] * dt), axis=1)
+    size = np.maximum(tracks.wh[end_row[a]].max(axis=1), tracks.wh[start_row[b]].max(axis=1))
+    cost = np.maximum(fwd, bwd) / np.maximum(size, 1e-9)
+    # where both move, the heading may not turn by more than max_turn across the gap
+    va, vb = vmean[end_row[a]], vmean[start_row[b]]
+    sa, sb = np.hypot(va[:, 0], va[:, 1]), np.hypot(vb[:, 0], vb[:, 1])
+    moving = (sa >= st.min_speed) & (sb >= st.min_speed)
+    cos = np.einsum("ti,ti->t", va, vb) / np.maximum(sa * sb, 1e-12)
+    ok = (cost <= st.join_radius) & (~moving | (cos >= np.cos(np.radians(st.max_turn))))
+    a, b, cost = a[ok], b[ok], cost[ok]
+    pred = np.arange(t_n)
+    used_a = np.zeros(t_n, bool)
+    used_b = np.zeros(t_n, bool)
+    for i in np.argsort(cost, kind="stable").tolist():  # the candidate pairs, a few per track
+        if not used_a[a[i]] and not used_b[b[i]]:
+            used_a[a[i]] = used_b[b[i]] = True
+            pred[b[i]] = a[i]
+    if not used_b.any():
+        return tracks, {}
+    head = pred.copy()
+    while True:  # follow each chain of fragments to its first
+        nxt = head[head]
+        if np.array_equal(nxt, head):
+            break
+        head = nxt
+    ids = tracks.ids
+    new_id = ids[head][tracks.track_index]
+    order = np.lexsort((tracks.frame, new_id))
+    joined = TrackPoints(
+        tracks.frame[order], new_id[order], tracks.xy[order], tracks.wh[order],
+        tracks.velocity[order], tracks.measured_xy[order], tracks.state[order],
+        tracks.cls[order], tracks.velocity_source,
+    )
+    moved = np.flatnonzero(head != np.arange(t_n))
+    return joined, {int(ids[t]): int(ids[head[t]]) for t in moved.tolist()}
 
 
 def turn_table(approaches: list[Zone], centre: FloatArray | None = None) -> dict[

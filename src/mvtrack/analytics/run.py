@@ -24,7 +24,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.analytics.lines import BACKWARD, FORWARD, line_crossings
-from mvtrack.analytics.movements import UNKNOWN, TrackMovements, track_movements
+from mvtrack.analytics.movements import (
+    UNKNOWN,
+    TrackMovements,
+    join_fragments,
+    track_movements,
+)
 from mvtrack.analytics.settings import AnalyticsSettings
 from mvtrack.analytics.speed import (
     RowSpeeds,
@@ -107,6 +112,8 @@ def analyse(
         raise ValueError(f"fps must be a positive number, got {fps}")
     if n_frames is None:
         n_frames = int(tracks.frame.max()) + 1 if len(tracks) else 1
+    # one object's fragments are one track for everything counted below
+    tracks, joined = join_fragments(tracks, fps, settings.movements)
     T = float(settings.interval)
     n_int = n_intervals(n_frames, fps, T)
     t_n = tracks.n_tracks
@@ -282,8 +289,15 @@ def analyse(
         })
     trows["crossings"] = np.array([" ".join(line_hits.get(int(t), [])) for t in tracks.ids],
                                   dtype=str) if t_n else np.zeros(0, str)
+    # the tracker's IDs joined into each track (join_fragments), so that a row here can be
+    # found in the tracker's results
+    pieces: dict[int, list[str]] = {}
+    for later, first in sorted(joined.items()):
+        pieces.setdefault(first, []).append(str(later))
+    trows["joined"] = np.array([" ".join(pieces.get(int(t), [])) for t in tracks.ids],
+                               dtype=str) if t_n else np.zeros(0, str)
     return AnalyticsResult(counts, movements, speeds_t, trows, float(fps), int(n_frames), T,
-                           settings, mv, speeds)
+                           settings, mv, speeds, extra={"joined": joined})
 
 
 def analyse_log(log: Any, settings: AnalyticsSettings, fps: float | None = None,

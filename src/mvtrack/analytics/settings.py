@@ -193,9 +193,10 @@ def settings_from_dict(data: dict[str, Any], path: str | os.PathLike[str] = "<se
     if "movements" in data:
         mv = c.table("movements", data["movements"],
                      ("horizon", "window", "gap", "min_speed", "max_turn",
-                      "centre"))
+                      "centre", "join", "join_radius"))
         mkw: dict[str, Any] = {}
-        for key in ("horizon", "window", "gap", "min_speed", "max_turn"):
+        for key in ("horizon", "window", "gap", "min_speed", "max_turn", "join",
+                    "join_radius"):
             if key in mv:
                 mkw[key] = c.number(f"movements.{key}", mv[key], minimum=0.0)
         if "centre" in mv:

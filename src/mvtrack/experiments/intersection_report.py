@@ -96,9 +96,14 @@ a vehicle waiting) recovers them exactly in {summary['kalman-ca']['counts_exact_
 on the scene's true tracks (the scene lets every vehicle leave the image before the last frame,
 so every movement ends in the video). On the trackers' output every spurious track long
 enough to count (split halves of two-tone vehicles, fragments of a standing one) adds a
-movement; a track lost inside the intersection box is completed along its heading (a
-left-turner lost before it turns reads as straight) or reported incomplete; and a waiting
-vehicle counts as waiting only when one of its tracks stands ≥ 2 s.
+movement; a track that ends and another that starts within 0.5 s where the first one led
+are joined into one before anything is counted (`mvtrack.analytics.movements.join_fragments`:
+the modern default loses a turning vehicle for 2–5 frames at its turn, or a waiting one as
+it drives off, and restarts it; counted apart, each piece was completed along its own heading
+and a turn read as two straight movements); a track lost inside the intersection box is
+completed along its heading (a left-turner lost before it turns reads as straight) or
+reported incomplete; and a waiting vehicle counts as waiting only when one of its tracks
+stands ≥ 2 s.
 
 Spurious tracks are sorted by where they sit (within 8 px of a pole, within 20 px of a vehicle,
 elsewhere). MOTA/IDF1 use IoU ≥ 0.5 on the boxes, which is strict for 16×9 px vehicles whose
