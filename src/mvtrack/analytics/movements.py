@@ -36,6 +36,8 @@ from numpy.typing import NDArray
 
 from mvtrack.analytics.tracks import TrackPoints, local_mean
 from mvtrack.analytics.zones import Zone, zone_visits
+from mvtrack.association.assign import assign
+from mvtrack.fragments import chain_heads, starts_between
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -147,12 +149,7 @@ def join_fragments(
     vmean, _ = local_mean(tracks.frame, tracks.track_id, tracks.velocity, half)
     vmean = np.nan_to_num(vmean)
     f_end, f_start = tracks.frame[end_row], tracks.frame[start_row]
-    by_start = np.argsort(f_start, kind="stable")
-    lo = np.searchsorted(f_start[by_start], f_end + 1)
-    hi = np.searchsorted(f_start[by_start], f_end + g, side="right")
-    n = hi - lo
-    a = np.repeat(np.arange(t_n), n)
-    b = by_start[np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + np.repeat(lo, n)]
+    a, b = starts_between(f_start, f_end + 1, f_end + g)
     if a.size == 0:
         return tracks, {}
     dt = (f_start[b] - f_end[a]).astype(np.float64)[:, None]
@@ -167,22 +164,12 @@ def join_fragments(
     moving = (sa >= st.min_speed) & (sb >= st.min_speed)
     cos = np.einsum("ti,ti->t", va, vb) / np.maximum(sa * sb, 1e-12)
     ok = (cost <= st.join_radius) & (~moving | (cos >= np.cos(np.radians(st.max_turn))))
-    a, b, cost = a[ok], b[ok], cost[ok]
-    pred = np.arange(t_n)
-    used_a = np.zeros(t_n, bool)
-    used_b = np.zeros(t_n, bool)
-    for i in np.argsort(cost, kind="stable").tolist():  # the candidate pairs, a few per track
-        if not used_a[a[i]] and not used_b[b[i]]:
-            used_a[a[i]] = used_b[b[i]] = True
-            pred[b[i]] = a[i]
-    if not used_b.any():
+    pairs = assign(a[ok], b[ok], cost[ok], t_n, t_n, "greedy")  # one to one, nearest first
+    if pairs.track.size == 0:
         return tracks, {}
-    head = pred.copy()
-    while True:  # follow each chain of fragments to its first
-        nxt = head[head]
-        if np.array_equal(nxt, head):
-            break
-        head = nxt
+    parent = np.arange(t_n)
+    parent[pairs.det] = pairs.track
+    head = chain_heads(parent)
     ids = tracks.ids
     new_id = ids[head][tracks.track_index]
     order = np.lexsort((tracks.frame, new_id))

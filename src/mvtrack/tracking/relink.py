@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.association.distances import resolve_gate
+from mvtrack.fragments import chain_heads, starts_between
 from mvtrack.tracking.config import TrackerConfig
 from mvtrack.tracking.log import ROW_FIELDS, concat_rows
 from mvtrack.types import TrackFrame, TrackState
@@ -96,14 +97,7 @@ def relink(frames: list[TrackFrame], config: TrackerConfig) -> list[TrackFrame]:
     if longest <= 0.0:
         return list(frames)
     n_max = int(np.floor(np.sqrt(longest) / SPEED_STD * config.fps))  # S(n / f) <= σ_max²
-    by_start = np.argsort(fr[head], kind="stable")
-    starts = fr[head][by_start]
-    lo = np.searchsorted(starts, last_row, side="right")
-    hi = np.searchsorted(starts, fr[tail] + n_max, side="right")
-    count = np.maximum(hi - lo, 0)
-    ia = np.repeat(np.arange(ids.size), count)
-    ib = by_start[np.repeat(lo, count) + np.arange(count.sum())
-                  - np.repeat(np.cumsum(count) - count, count)]
+    ia, ib = starts_between(fr[head], last_row + 1, fr[tail] + n_max)
     if ia.size == 0:
         return list(frames)
     gap = fr[head[ib]] - fr[tail[ia]]
@@ -124,12 +118,7 @@ def relink(frames: list[TrackFrame], config: TrackerConfig) -> list[TrackFrame]:
         return list(frames)
     parent = np.arange(ids.size)
     parent[dst] = src
-    root = parent.copy()  # follow chains a → b → c to their first piece
-    while True:
-        nxt = parent[root]
-        if np.array_equal(nxt, root):
-            break
-        root = nxt
+    root = chain_heads(parent)  # chains a → b → c to their first piece
     out_tid = np.where(public, ids[root][pos], tid)
     cuts = np.flatnonzero(np.diff(fr)) + 1
     return [TrackFrame(int(fr[idx[0]]), out_tid[idx], *(c[name][idx] for name in ROW_FIELDS[1:]))
