@@ -442,17 +442,25 @@ def test_gate_ncc_equals_opencv_masked_ccoeff_normed(th: int, tw: int) -> None:
     assert gate_ncc(win, t.rows, t.cols, t.tz, t.var_t, 1e3, 1e3, 1.0, out)[2] == -1
 
 
-def test_search_radius_is_capped_by_max_radius() -> None:
+def test_the_stopped_vehicle_guard_searches_max_shift_without_reading_the_gates() -> None:
+    """The guard searches around where a vehicle was last seen and refuses matches beyond
+    ``max_shift``: its search radius is ``max_shift`` for every track, whether the tracker's
+    gate is wider or narrower, and the gates (a prediction of every track) are not computed."""
     from mvtrack import tracking
+    from mvtrack.config import RunSettings
+    from mvtrack.video import build_rescuer
 
-    tracker = _tracked(tracking.paper1(fps=30, gate_px=20.0))
-    uids = tracker.tracks.uid
-    assert TemplateRescuer(TemplateBank(), tracker, max_radius=4).radii(uids) == \
-        pytest.approx(4.0)
-    assert TemplateRescuer(TemplateBank(), tracker, max_radius=50).radii(uids) == \
-        pytest.approx(20.0)
-    with pytest.raises(ValueError, match="max_radius"):
-        TemplateRescuer(TemplateBank(), tracker, max_radius=-1)
+    for gate_px in (2.0, 20.0):
+        tracker = _tracked(tracking.paper1(fps=30, gate_px=gate_px))
+        uids = tracker.tracks.uid
+        assert TemplateRescuer(TemplateBank(), tracker).radii(uids) == pytest.approx(gate_px)
+        guard = build_rescuer(RunSettings(template_params={"max_shift": 5.0}), tracker)
+
+        def no_gates() -> None:
+            raise AssertionError("the gates were read")
+
+        tracker.gates = no_gates
+        assert guard.inner.radii(uids) == pytest.approx(5.0)
     # a vehicle 6 px from the search centre is found with a 20 px radius, not with 4 px
     tl = (50, 40)
     bank = _bank_with_vehicle(tl)
@@ -497,7 +505,7 @@ def test_build_rescuer_gives_the_bank_the_detectors_mask_and_min_pixels() -> Non
     rescuer = build_rescuer(RunSettings(), tracker, dm)
     assert rescuer.inner.detector is dm
     assert rescuer.inner.bank.min_pixels == 20  # half the detector's min_area
-    assert rescuer.inner.max_radius == rescuer.max_shift == 4.0
+    assert rescuer.max_shift == 4.0
     own = build_rescuer(RunSettings(template_params={"min_pixels": 70}), tracker, dm)
     assert own.inner.bank.min_pixels == 70
     # the travel guard is the bank's (min_travel in box lengths, min_travel_px)

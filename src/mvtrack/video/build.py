@@ -122,8 +122,10 @@ def build_rescuer(settings: RunSettings, tracker: Any, detector: Any = None) -> 
         guard = StoppedVehicleRescuer(None, tracker, max_shift, pieces)
     except TypeError as exc:
         raise InputError(f"template settings: {exc}") from None
-    # matches farther than max_shift are refused: the NCC need not look beyond it
-    guard.inner = TemplateRescuer(bank, tracker, detector=detector, max_radius=guard.max_shift)
+    # the guard searches around where each vehicle was last seen, not around the
+    # prediction, and refuses matches farther than max_shift from there: the NCC looks that
+    # far and no farther (the tracker's gate, a region about the prediction, is not read)
+    guard.inner = TemplateRescuer(bank, tracker, gate_radius=guard.max_shift, detector=detector)
     return guard
 
 

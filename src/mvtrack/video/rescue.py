@@ -483,11 +483,6 @@ class TemplateRescuer:
         templates to the objects' own pixels (see :meth:`TemplateBank.observe`). Strongly
         recommended: without it a template is the whole box, road included, and it can keep
         matching the empty road after a pedestrian or vehicle has left.
-    max_radius : float, optional
-        Search no farther than this (px) from the centre the tracker gives, even if the gate
-        is wider. For a caller that accepts only matches this close (the pipeline's
-        ``max_shift`` around a stopped vehicle's last position) the rest of the gate is
-        wasted work: an NCC over a 20 px gate costs (2·20 + 1)² placements, over 4 px 9².
 
     Attributes
     ----------
@@ -502,15 +497,11 @@ class TemplateRescuer:
         tracker: Any = None,
         gate_radius: float | None = None,
         detector: Any = None,
-        max_radius: float | None = None,
     ) -> None:
-        if max_radius is not None and not max_radius >= 0:
-            raise ValueError(f"max_radius must be ≥ 0 px or None, got {max_radius}")
         self.bank = bank
         self.tracker = tracker
         self.detector = detector
         self._radius = None if gate_radius is None else float(gate_radius)
-        self.max_radius = None if max_radius is None else float(max_radius)
         self.held_scores: HeldScores = NO_SCORES
         self._accepted: tuple[IntArray, FloatArray] = (_NO_UIDS, _NO_VALUES)
         # the radii of the tracker's gates, read once per state of the tracker (the searches
@@ -524,17 +515,14 @@ class TemplateRescuer:
 
     def radii(self, uids: Any) -> FloatArray:
         """The search radius in px of each track ``uids``: ``gate_radius`` if given, else its
-        gate's (:func:`search_radii`, read once per state of the tracker); at most
-        ``max_radius``."""
+        gate's (:func:`search_radii`, read once per state of the tracker)."""
         uids = np.asarray(uids, np.int64).reshape(-1)
-        table = self._radii_now()
         if self._radius is not None:
-            r = np.full(uids.size, self._radius)
-        elif table is None:
-            r = np.full(uids.size, self.bank.gate_radius)
-        else:
-            r = lookup_radii(table, uids, self.bank.gate_radius)
-        return r if self.max_radius is None else np.minimum(r, self.max_radius)
+            return np.full(uids.size, self._radius)
+        table = self._radii_now()
+        if table is None:
+            return np.full(uids.size, self.bank.gate_radius)
+        return lookup_radii(table, uids, self.bank.gate_radius)
 
     def search(self, frame: Image) -> RescueFn:
         """``search(uids, predicted_xy, wh) -> (found, xy, score)`` on ``frame``: the bank's
