@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mvtrack.detection import background, make_detector
-from mvtrack.detection.background import box_cover
+from mvtrack.detection.background import box_cover, count_held
 from mvtrack.tracking import Tracker, TrackerConfig
 
 STAND = (60, 360)  # frames the vehicle stands still (it drives before and after)
@@ -102,3 +102,22 @@ def test_box_cover_matches_filling_the_boxes_one_by_one(seed, compiled, monkeypa
 def test_hold_must_be_a_whole_number_of_frames(bad) -> None:
     with pytest.raises(ValueError, match="hold"):
         make_detector("disturbance-map", hold=bad)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("hold", [0, 2, 70000])
+def test_count_held_matches_counting_frame_by_frame(compiled, hold) -> None:
+    """Each pixel's count of frames in a row under a box, capped at ``hold + 1`` (and at the
+    uint16's range), and the learnt mask (outside, or held over ``hold`` frames), against a
+    plain NumPy count over random masks."""
+    rng = np.random.default_rng(hold)
+    fn = count_held if compiled else count_held.py_func
+    held = np.zeros((7, 9), np.uint16)
+    ref = np.zeros((7, 9), np.int64)
+    for _ in range(6):
+        inside = np.where(rng.random((7, 9)) < 0.7, 255, 0).astype(np.uint8)
+        learnt = np.full((7, 9), 7, np.uint8)
+        fn(inside, held, hold, learnt)
+        ref = np.where(inside > 0, np.minimum(ref + 1, min(hold + 1, 65535)), 0)
+        np.testing.assert_array_equal(held, ref)
+        np.testing.assert_array_equal(learnt, np.where((inside == 0) | (ref > hold), 255, 0))

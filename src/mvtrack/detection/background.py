@@ -170,19 +170,15 @@ class DisturbanceMap(FrontEnd):
 
     def _learnt_pixels(self) -> NDArray[np.uint8]:
         """The mask of the pixels :math:`B` learns this frame under ``hold``: those outside
-        every held box, and those held ``hold`` frames in a row (the slow path). Whole-image
-        OpenCV passes: count the frames each pixel has been held, zero outside, cap."""
+        every held box, and those held ``hold`` frames in a row (the slow path); the count of
+        the frames each pixel has been held is kept in one compiled pass
+        (:func:`count_held`)."""
         shape = self._fg.shape
         if self._held_for is None or self._held_for.shape != shape:
             self._held_for = np.zeros(shape, np.uint16)
-        inside = box_cover(self._held_boxes, shape)  # 0/255
-        outside = cv2.bitwise_not(inside)
-        held = self._held_for
-        cv2.add(held, 1.0, dst=held, mask=inside)  # consecutive frames held
-        cv2.bitwise_and(held, 0.0, dst=held, mask=outside)  # none outside the boxes
-        cv2.min(held, float(self.hold + 1), dst=held)
-        over = cv2.compare(held, float(self.hold), cv2.CMP_GT)  # held too long: learnt
-        return cv2.bitwise_or(over, outside)
+        learnt = np.empty(shape, np.uint8)
+        count_held(box_cover(self._held_boxes, shape), self._held_for, int(self.hold), learnt)
+        return learnt
 
     def _remove_ghosts(self, grey: NDArray[np.uint8]) -> None:
         """Reset the pixels of the ghost blobs of the raw mask to the frame (option
@@ -194,6 +190,25 @@ class DisturbanceMap(FrontEnd):
             return
         self.background[sel] = grey[sel]
         self._fg[sel] = 0
+
+
+@kernel
+def count_held(inside: NDArray[np.uint8], held: NDArray[np.uint16], hold: int,
+               learnt: NDArray[np.uint8]) -> None:
+    """Per pixel: ``held`` counts the frames in a row it lies ``inside`` a held box (0
+    outside, at most ``hold + 1``); ``learnt`` is 255 where the background learns it, outside
+    every box or held more than ``hold`` frames, else 0 (the count saturates at the
+    ``uint16``'s 65 535)."""
+    cap = min(hold + 1, 65535)
+    for y in range(held.shape[0]):
+        for x in range(held.shape[1]):
+            if inside[y, x]:
+                count = min(int(held[y, x]) + 1, cap)
+                held[y, x] = count
+                learnt[y, x] = 255 if count > hold else 0
+            else:
+                held[y, x] = 0
+                learnt[y, x] = 255
 
 
 def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.uint8]:
