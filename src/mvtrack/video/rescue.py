@@ -538,10 +538,10 @@ class TemplateRescuer:
 
     def _radii_now(self) -> tuple[IntArray, FloatArray] | None:
         """The radii of the tracker's gates for its next step, a :func:`radius_table` (None:
-        not needed, or no gates); computed once per state of the tracker (a step replaces its
+        a tracker without gates); computed once per state of the tracker (a step replaces its
         track table)."""
         tracker = self.tracker
-        if self._radius is not None or not hasattr(tracker, "gates"):
+        if not hasattr(tracker, "gates"):
             return None
         table = getattr(tracker, "tracks", None)
         if self._radii is None or self._radii[0] is not table or table is None:
