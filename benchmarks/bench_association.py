@@ -33,7 +33,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from mvtrack.association import Gate, TrackView, assign, resolve_gate
-from mvtrack.association.assign import HIGH, RULE_CODES, associate
+from mvtrack.association.assign import HIGH, NO_STAND, RULE_CODES, associate
 from mvtrack.types import Detections
 
 #: the tracker's size term: w_s = 1 / size_noise², size_noise 0.25 (docs/settings.md)
@@ -205,7 +205,7 @@ def main() -> None:
             gate = Gate.build(dist, view, g, size_weight=SIZE_W)
             call = (gate.view.xy, gate.cov, np.zeros((0, 0)), gate.view.wh,
                     np.ascontiguousarray(dets.xy), np.ascontiguousarray(dets.wh), dclass, g,
-                    SIZE_W, RULE_CODES["optimal"], gate.search)
+                    SIZE_W, RULE_CODES["optimal"], NO_STAND, gate.search)
             matched = int((associate(*call) >= 0).sum())
             t_frame, w_frame = _median_ms(args.repeats, associate, *call)
             ti, dj, _ = gate.pairs(dets.xy, dets.wh)

@@ -13,11 +13,13 @@ from scipy.optimize import linear_sum_assignment
 from mvtrack.association.assign import (
     HIGH,
     LOW,
+    NO_STAND,
     RULE_CODES,
     _small_block,
     assign,
     associate,
     solve,
+    standing_pairs,
 )
 from mvtrack.association.gate import Gate
 from mvtrack.association.pairs import quadratic_pairs
@@ -258,8 +260,12 @@ def test_the_compiled_kernels_equal_their_plain_functions() -> None:
     for n, m in ((8, 9), (120, 110)):
         cx, S, twh, dxy, dwh = _scene(rng, n, m, size=50.0 * np.sqrt(n))
         dclass = rng.choice(np.array([0, 1, 2], np.int8), m, p=[0.1, 0.3, 0.6])
+        # a third of the tracks held where they stand, in a box about their centre
+        stand = np.full((n, 4), np.nan)
+        held = rng.random(n) < 0.3
+        stand[held] = np.column_stack([cx[held] + rng.normal(0, 5, (held.sum(), 2)), twh[held]])
         for rule in RULE_CODES.values():
-            args = (cx, S, np.zeros((0, 0)), twh, dxy, dwh, dclass, 9.21, 16.0, rule)
+            args = (cx, S, np.zeros((0, 0)), twh, dxy, dwh, dclass, 9.21, 16.0, rule, stand)
             np.testing.assert_array_equal(associate(*args), associate.py_func(*args))
 
 
@@ -277,15 +283,44 @@ def test_high_detections_first_then_the_low_ones_for_the_tracks_left_over() -> N
     # the low box (row 1) sits nearer the second track than the high one does, and yet the
     # second track takes it only in the second stage, after the first track took the high box
     dclass = np.array([HIGH, LOW, 0], np.int8)
-    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt)
+    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt, NO_STAND)
     assert got.tolist() == [0, 1]
     dclass = np.array([HIGH, 0, 0], np.int8)  # dropped boxes are never taken
-    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt)
+    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt, NO_STAND)
     assert got.tolist() == [0, -1]
     # and with all three high, the optimal assignment gives each track its nearest
     dclass = np.full(3, HIGH, np.int8)
-    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt)
+    got = associate(cx, S, no, twh, dxy, dwh, dclass, 9.21, 0.0, opt, NO_STAND)
     assert got.tolist() == [0, 1]
+
+
+def test_a_held_track_takes_only_a_detection_centred_in_the_box_it_stands_in() -> None:
+    """Paper 1's 20 px circle about a track held at (100, 100) in a 16 × 10 box holds two
+    detections: A 6 px below (outside the box's half height of 5) and B 7 px to the right
+    (inside its half width of 8). Nearest, a free track takes A; held, it takes B (the pair
+    with A is dropped before the assignment, not the assignment undone), and with A alone
+    it takes none. A free track beside it (at x = 120) takes B either way."""
+    cx = np.array([[100.0, 100.0], [120.0, 100.0]])
+    S = np.array([[1.0, 0.0, 1.0]] * 2)  # the Euclidean gate: C = I, g in px²
+    twh = np.array([[16.0, 10.0], [16.0, 10.0]])
+    dxy = np.array([[100.0, 106.0], [107.0, 100.0]])  # A, B
+    dwh = np.full((2, 2), 10.0)
+    no, near = np.zeros((0, 0)), RULE_CODES["nearest"]
+    dclass = np.full(2, HIGH, np.int8)
+    stand = np.array([[100.0, 100.0, 16.0, 10.0], [np.nan] * 4])
+    args = (cx, S, no, twh, dxy, dwh, dclass, 400.0, 0.0, near)
+    assert associate(*args, NO_STAND).tolist() == [0, 1]
+    assert associate(*args, stand).tolist() == [1, 1]
+    a_only = (cx, S, no, twh, dxy[:1], dwh[:1], dclass[:1], 400.0, 0.0, near)
+    assert associate(*a_only, NO_STAND).tolist() == [0, -1]  # A lies 20.9 px from x = 120
+    assert associate(*a_only, stand).tolist() == [-1, -1]
+    # the pairs themselves, compiled and plain
+    ti, dj, c = np.array([0, 0, 1, 1]), np.array([0, 1, 0, 1]), np.array([36.0, 49, 436, 169])
+    for fn in (standing_pairs, standing_pairs.py_func):
+        kt, kd, kc = fn(ti, dj, c, stand, dxy)
+        assert kt.tolist() == [0, 1, 1] and kd.tolist() == [1, 0, 1]
+        assert kc.tolist() == [49.0, 436.0, 169.0]
+        assert fn(ti, dj, c, NO_STAND, dxy)[1].tolist() == [0, 1, 0, 1]
 
 
 def test_solve_writes_only_the_matched_tracks() -> None:

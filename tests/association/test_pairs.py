@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtrack.association.assign import HIGH, LOW, RULE_CODES, associate
+from mvtrack.association.assign import HIGH, LOW, NO_STAND, RULE_CODES, associate
 from mvtrack.association.gate import Gate
 from mvtrack.association.pairs import (
     _DENSE_TESTS,
@@ -130,9 +130,9 @@ def test_associate_by_overlap_equals_associate_by_the_dense_matrix(rule: str) ->
                              np.broadcast_to(np.eye(2), (n, 2, 2)), np.zeros((n, 2)), twh)
             full = Gate.build("iou", view, 0.7, size_weight=size_w).matrix(dxy, dwh)
             by_matrix = associate(cx, S, full, twh, dxy, dwh, dclass, 0.7, size_w,
-                                  RULE_CODES[rule], BY_MATRIX)
+                                  RULE_CODES[rule], NO_STAND, BY_MATRIX)
             by_overlap = associate(cx, S, np.zeros((0, 0)), twh, dxy, dwh, dclass, 0.7,
-                                   size_w, RULE_CODES[rule], BY_OVERLAP)
+                                   size_w, RULE_CODES[rule], NO_STAND, BY_OVERLAP)
             np.testing.assert_array_equal(by_overlap, by_matrix)
             assert (by_overlap >= 0).sum() > n // 4
 

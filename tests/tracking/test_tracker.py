@@ -342,6 +342,35 @@ def test_rescue_holds_a_stopped_track_and_a_detection_confirms_it_again() -> Non
     np.testing.assert_array_equal(stopped.measured_xy[0], a[20])
 
 
+@pytest.mark.parametrize("predictor", ["kalman-ca", "rls"])
+def test_a_held_vehicle_does_not_leave_with_a_vehicle_passing_within_the_gate(predictor) -> None:
+    """Paper 1's system: a 16 × 9 vehicle stops at (140, 100) and fades (held by its
+    template from frame 22 on); another drives past 12 px below it at 2 px a frame, inside
+    the 20 px circle but outside the held vehicle's box. The held track takes none of its
+    detections: it stays held where it stands, and the passing vehicle is tracked apart."""
+    n, wh = 60, np.array([[16.0, 9.0]])
+    a = _line([100.0, 100.0], [2.0, 0.0], n)
+    a[20:] = a[20]
+    a[22:] = np.nan  # faded into the background: only the template finds it
+    b = _line([100.0, 112.0], [2.0, 0.0], n)
+    b[:25] = np.nan  # enters at frame 25, passes (140, 112) at frame 45
+    frames = _frames({0: a, 1: b}, n, wh)
+
+    def rescue(uids, xy, wh_):
+        return np.ones(len(uids), bool), np.repeat([[140.0, 100.0]], len(uids), axis=0)
+
+    tracker = Tracker(paper1(predictor, fps=30.0))
+    out = [tracker.step(d, rescue=rescue) for d in frames]
+    first = out[5].track_id[0]
+    for k in range(22, n):
+        tf = out[k]
+        row = np.flatnonzero(tf.track_id == first)
+        assert row.size == 1, k
+        assert tf.state[row[0]] == TrackState.STOPPED, k
+        np.testing.assert_allclose(tf.measured_xy[row[0]], [140.0, 100.0])
+    assert all(int(first) not in out[k].track_id[out[k].det_index >= 0] for k in range(22, n))
+
+
 def test_the_rescue_hook_as_data_equals_the_callback() -> None:
     """``associate`` → template matching on ``Pending.unmatched`` → ``commit`` is ``step``
     with the callback."""

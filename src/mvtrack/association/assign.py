@@ -3,7 +3,9 @@
 The tracker's association of one frame is :func:`associate`, a compiled kernel
 (:func:`mvtrack.jit.kernel`) over the gate of :mod:`mvtrack.association.gate`:
 
-1. **candidate pairs** inside the gate (:mod:`mvtrack.association.pairs`);
+1. **candidate pairs** inside the gate (:mod:`mvtrack.association.pairs`); a track held
+   by template matching keeps only the detections centred in the box it stands in
+   (:func:`standing_pairs`);
 2. **stages by detection score** (ByteTrack's): every track against the high-score
    detections, then the tracks left over against the low-score ones;
 3. **a rule** per stage (``ASSIGN_RULES``):
@@ -38,7 +40,8 @@ from mvtrack.jit import kernel, python_call
 IntArray = NDArray[np.intp]
 FloatArray = NDArray[np.float64]
 
-__all__ = ["ASSIGN_RULES", "RULE_CODES", "Assignment", "assign", "associate"]
+__all__ = ["ASSIGN_RULES", "NO_STAND", "RULE_CODES", "Assignment", "assign", "associate",
+           "standing_pairs"]
 
 #: the rules by name (:data:`mvtrack.registry.ASSIGN_RULES`)
 ASSIGN_RULES = tuple(registry.ASSIGN_RULES)
@@ -207,11 +210,42 @@ def solve(ti: IntArray, dj: IntArray, cost: FloatArray, n: int, m: int, rule: in
 
 # ------------------------------------------------------------------------------- one frame
 
+#: no track is held where it stands (:func:`standing_pairs`)
+NO_STAND = np.zeros((0, 4))
+
+
+@kernel
+def standing_pairs(ti: IntArray, dj: IntArray, c: FloatArray, stand: FloatArray,
+                   dxy: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
+    r"""The pairs left once each held track keeps only the detections centred in its box.
+
+    A track held by template matching (state ``STOPPED``: a vehicle that stopped and faded
+    into the background, SPEC §1.1 step 3) stands where its template matched. A detection of
+    it has its centre inside the box it stands in, ``stand[i] = (x, y, w, h)``:
+
+    .. math:: |x_d - x| \le w / 2, \quad |y_d - y| \le h / 2.
+
+    A blob farther off is another object passing by (within paper 1's 20 px circle, or a
+    gate that the filter has not yet closed), and a held track that took it would leave
+    with it. ``stand`` (N, 4) has NaN rows for the tracks that are not held, or no rows when
+    none is (:data:`NO_STAND`: the pairs are returned as they are).
+    """
+    if stand.shape[0] == 0:
+        return ti, dj, c
+    keep = np.ones(ti.size, np.bool_)
+    for k in range(ti.size):
+        i, j = ti[k], dj[k]
+        if stand[i, 0] == stand[i, 0]:  # not NaN: held
+            keep[k] = (abs(dxy[j, 0] - stand[i, 0]) <= stand[i, 2] / 2
+                       and abs(dxy[j, 1] - stand[i, 1]) <= stand[i, 3] / 2)
+    return ti[keep], dj[keep], c[keep]
+
 
 @kernel
 def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
               dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8], gate: float,
-              size_w: float, rule: int, search: int = BY_QUADRATIC) -> IntArray:
+              size_w: float, rule: int, stand: FloatArray,
+              search: int = BY_QUADRATIC) -> IntArray:
     """The detection of every track in one frame (−1: none), in two stages by score.
 
     Parameters
@@ -229,6 +263,10 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
     gate, size_w, rule
         The gate on the value, the weight of the size term and the rule
         (:data:`RULE_CODES`).
+    stand : (N, 4) or (0, 4)
+        The box ``(x, y, w, h)`` each track held by template matching stands in (NaN rows
+        for the others; no rows when none is held): such a track takes only a detection
+        centred in it (:func:`standing_pairs`).
     search : int
         How the pairs are found (:func:`mvtrack.association.pairs.frame_pairs`; the
         gate's :attr:`~mvtrack.association.gate.Gate.search`): about each centre (default),
@@ -247,6 +285,7 @@ def associate(cx: FloatArray, S: FloatArray, cost: FloatArray, twh: FloatArray,
         if not dsel.any() or not tsel.any():
             continue
         ti, dj, c = frame_pairs(search, cx, S, cost, twh, tsel, dxy, dwh, dsel, gate, size_w)
+        ti, dj, c = standing_pairs(ti, dj, c, stand, dxy)
         solve(ti, dj, c, n, m, rule, gate, det_index)
     return det_index
 

@@ -30,6 +30,10 @@ the value 1, outside any gate below 1); ``coupled-literal`` (eq. (10) as printed
 about the prediction, E2.7) is given to the assignment as a cost matrix (:meth:`Gate.matrix`).
 Neither is drawn.
 
+A track held by template matching (a vehicle that stopped and faded) takes, besides, only a
+detection centred in the box it stands in (:func:`mvtrack.association.assign.standing_pairs`);
+its region is drawn as the gate's.
+
 The size term (``w_s = 1 / σ_s²``, σ_s the standard deviation of the log ratio of a track's
 box sizes from frame to frame) ranks and gates a pair by its box as well as its position: a
 box twice as tall is another object, nearer or farther.

@@ -40,6 +40,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack.association.assign import NO_STAND
 from mvtrack.jit import kernel
 from mvtrack.types import TrackState
 
@@ -189,6 +190,21 @@ def births(dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8],
         key[:] = dxy[idx, 0]
         idx = idx[np.argsort(key, kind="mergesort")]
     return idx
+
+
+def standing(ints: IntArray, floats: FloatArray) -> FloatArray:
+    """The box ``(x, y, w, h)`` each track held by template matching in the last frame
+    (state ``STOPPED``) stands in: its last position, where the template matched, and its
+    box. (N, 4) with NaN rows for the other tracks; no rows when none is held
+    (:data:`~mvtrack.association.assign.NO_STAND`). Such a track takes only a detection
+    centred in it (:func:`~mvtrack.association.assign.standing_pairs`)."""
+    held = ints[:, STATE] == STOPPED
+    if not held.any():
+        return NO_STAND
+    out = np.full((ints.shape[0], 4), np.nan)
+    out[held, :2] = floats[held, LAST_X:LAST_Y + 1]
+    out[held, 2:] = floats[held, W:H + 1]
+    return out
 
 
 @kernel

@@ -44,7 +44,7 @@ BoolArray = NDArray[np.bool_]
 def predict_assign(
     x: FloatArray, P: FloatArray, mu: FloatArray, wh: FloatArray, accel: FloatArray,
     pi: FloatArray, rz: float, dxy: FloatArray, dwh: FloatArray, dclass: NDArray[np.int8],
-    gate: float, size_w: float, rule: int,
+    gate: float, size_w: float, rule: int, stand: FloatArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray,
            NDArray[np.intp]]:
     """Predict every track and assign the frame's detections.
@@ -52,7 +52,8 @@ def predict_assign(
     ``accel`` (2,): the steady and the manoeuvring acceleration std in box sizes per frame²;
     ``rz``: the measurement std in box sizes. Returns the predicted IMM state (``x``, ``P``,
     ``mu``), the gate centres (N, 2), the gate covariances ``(s_xx, s_xy, s_yy)`` (N, 3),
-    the standard deviation of each predicted position (N, 2) and each track's detection.
+    the standard deviation of each predicted position (N, 2) and each track's detection;
+    ``stand`` as :func:`~mvtrack.association.assign.associate` takes it.
     """
     n = x.shape[0]
     q = np.empty((n, 2, 2))
@@ -72,7 +73,8 @@ def predict_assign(
         cov[i, 2] = Pc[i, 1, 0] + ry * ry
         std[i, 0], std[i, 1] = math.sqrt(Pc[i, 0, 0]), math.sqrt(Pc[i, 1, 0])
     no_cost = np.zeros((0, 0))
-    det_index = associate(centre, cov, no_cost, wh, dxy, dwh, dclass, gate, size_w, rule)
+    det_index = associate(centre, cov, no_cost, wh, dxy, dwh, dclass, gate, size_w, rule,
+                          stand)
     return xp, Pp, mp, centre, cov, std, det_index
 
 

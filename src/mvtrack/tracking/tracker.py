@@ -40,7 +40,7 @@ from mvtrack.association.view import TrackView
 from mvtrack.filters.imm import IMMState
 from mvtrack.filters.predictors import make_predictor
 from mvtrack.tracking.config import TrackerConfig
-from mvtrack.tracking.lifecycle import STATE, TENTATIVE, UID, commit, measurements
+from mvtrack.tracking.lifecycle import STATE, TENTATIVE, UID, commit, measurements, standing
 from mvtrack.tracking.scores import ScoreCalibration
 from mvtrack.tracking.step import predict_assign, update_commit
 from mvtrack.tracking.table import WH, TrackTable, concat_state, take_state
@@ -250,10 +250,11 @@ class Tracker:
             return Pending(dets, np.zeros(0, np.intp), e, e, np.zeros(0, np.intp),
                            np.zeros(0, np.int64), e, cscore, dclass, ps)
         wh = tab.floats[:, WH]
+        stand = standing(tab.ints, tab.floats)  # a held track takes only what lies in its box
         if self.fused:  # the same steps in one compiled call (mvtrack.tracking.step)
             x, P, mu, centre, _, std, det_index = predict_assign(
                 ps.x, ps.P, ps.mu, wh, self._accel, self._pi, self.config.measurement_noise,
-                dets.xy, dets.wh, dclass, self.threshold, self._size_w, self._rule,
+                dets.xy, dets.wh, dclass, self.threshold, self._size_w, self._rule, stand,
             )
             ps = IMMState(x, P, mu)
         else:
@@ -261,7 +262,7 @@ class Tracker:
             gate = self._gate(ps, tab, self._k)
             det_index = associate(gate.view.xy, gate.cov, gate.dense(dets.xy, dets.wh), wh,
                                   dets.xy, dets.wh, dclass, gate.threshold, gate.size_weight,
-                                  self._rule, gate.search)
+                                  self._rule, stand, gate.search)
             centre, c = gate.view.xy, gate.view.cov
             std = np.sqrt(np.stack([c[:, 0, 0], c[:, 1, 1]], axis=1))
         unmatched = ((det_index < 0) & (tab.ints[:, STATE] != TENTATIVE)).nonzero()[0]
