@@ -50,3 +50,50 @@ def test_a_kernel_keeps_its_plain_function() -> None:
     from mvtrack.tracking.lifecycle import births
 
     assert births.py_func is not births and callable(births.py_func)
+
+
+def _add_one(x: float) -> float:
+    return x + 1.0
+
+
+def _fresh_kernel(monkeypatch, folder: Path):  # type: ignore[no-untyped-def]
+    """``_add_one`` compiled with a cache folder of its own, so its first call compiles."""
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setattr(jit, "_cache", str(folder))
+    return jit.kernel(_add_one)
+
+
+def test_the_first_compile_is_announced_once_and_a_cache_load_not_at_all(
+    tmp_path: Path, monkeypatch
+) -> None:
+    if not jit.COMPILED:
+        pytest.skip("numba is not compiling here")
+    calls: list[int] = []
+    jit.on_first_compile(lambda: calls.append(1))
+    monkeypatch.setattr(jit, "_compiled", False)
+    add = _fresh_kernel(monkeypatch, tmp_path)
+    assert not jit.compiled_here()
+    assert add(1.0) == 2.0 and calls == [1]  # compiled: announced
+    assert jit.compiled_here()
+    assert add(2) == 3.0 and calls == [1]  # a second specialisation: not again
+    jit.on_first_compile(lambda: calls.append(2))
+    again = _fresh_kernel(monkeypatch, tmp_path)  # the same function, a new dispatcher
+    assert again(1.0) == 2.0 and calls == [1]  # loaded from the cache: nothing to say
+    jit.on_first_compile(lambda: None)  # leave no test callback behind
+
+
+def test_the_command_line_says_it_is_compiling(tmp_path: Path, monkeypatch, capsys) -> None:
+    if not jit.COMPILED:
+        pytest.skip("numba is not compiling here")
+    from mvtrack.cli import main
+
+    assert main(["--version"]) == 0
+    capsys.readouterr()
+    _fresh_kernel(monkeypatch, tmp_path)(1.0)
+    err = capsys.readouterr().err
+    assert "compiling mvtrack's kernels" in err and err.count("\n") == 1
+    from mvtrack.cli._options import speed_note
+
+    assert speed_note() == "; this first run includes compiling the kernels"
+    monkeypatch.setattr(jit, "_compiled", False)
+    assert speed_note() == ""

@@ -55,10 +55,17 @@ KERNEL_MODULES = (
     "video/relink.py",
 )
 
-__all__ = ["COMPILED", "KERNEL_MODULES", "cache_dir", "kernel", "python_call"]
+__all__ = [
+    "COMPILED", "KERNEL_MODULES", "cache_dir", "compiled_here", "kernel", "on_first_compile",
+    "python_call",
+]
 
 _PACKAGE = Path(__file__).resolve().parent
 _cache: str | None = None
+_kernels: set[int] = set()  # id() of every dispatcher made by kernel()
+_notify: Callable[[], None] | None = None  # on_first_compile's callback, until it is called
+_listening = False  # whether on_first_compile's listener is registered
+_compiled = False  # whether a kernel was compiled in this process (seen by the listener)
 
 
 def cache_dir() -> str | None:
@@ -88,16 +95,58 @@ def kernel(fn: F) -> F:
         fn.py_func = fn  # type: ignore[attr-defined]
         return fn
     if os.environ.get("NUMBA_CACHE_DIR"):
-        return numba.njit(cache=True)(fn)  # type: ignore[no-any-return]
-    folder = cache_dir()
-    if folder is None:
-        return numba.njit(fn)  # type: ignore[no-any-return]
-    saved = _numba_config.CACHE_DIR
-    _numba_config.CACHE_DIR = folder  # read once, when the cache of fn is set up
-    try:
-        return numba.njit(cache=True)(fn)  # type: ignore[no-any-return]
-    finally:
-        _numba_config.CACHE_DIR = saved
+        compiled = numba.njit(cache=True)(fn)
+    elif (folder := cache_dir()) is None:
+        compiled = numba.njit(fn)
+    else:
+        saved = _numba_config.CACHE_DIR
+        _numba_config.CACHE_DIR = folder  # read once, when the cache of fn is set up
+        try:
+            compiled = numba.njit(cache=True)(fn)
+        finally:
+            _numba_config.CACHE_DIR = saved
+    _kernels.add(id(compiled))
+    return compiled  # type: ignore[no-any-return]
+
+
+def on_first_compile(notify: Callable[[], None]) -> None:
+    """Call ``notify()`` once, when numba starts to compile a kernel that its cache does not
+    hold: the first run after an install or an upgrade, which spends about half a minute
+    compiling before its first frame. Loading a kernel from the cache calls nothing. A later
+    call replaces a ``notify`` not yet called."""
+    global _notify, _listening
+    if numba is None:
+        return
+    if not _listening:
+        _listen()
+        _listening = True
+    _notify = notify
+
+
+def compiled_here() -> bool:
+    """Whether a kernel was compiled in this process since :func:`on_first_compile` was
+    first called: a speed measured over such a run includes the compilation."""
+    return _compiled
+
+
+def _listen() -> None:
+    """Register the listener of numba's compile events that :func:`on_first_compile` uses."""
+    from numba.core import event
+
+    class _FirstCompile(event.Listener):  # type: ignore[misc]
+        def on_start(self, ev: event.Event) -> None:
+            global _notify, _compiled
+            if id(ev.data["dispatcher"]) not in _kernels:
+                return
+            _compiled = True
+            if _notify is not None:
+                notify, _notify = _notify, None
+                notify()
+
+        def on_end(self, ev: event.Event) -> None:
+            pass
+
+    event.register("numba:compile", _FirstCompile())
 
 
 @contextlib.contextmanager

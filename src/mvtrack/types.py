@@ -58,8 +58,8 @@ class Detections:
     area: FloatArray = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
-        xy = np.asarray(self.xy, dtype=np.float64).reshape(-1, 2)
-        wh = np.asarray(self.wh, dtype=np.float64).reshape(-1, 2)
+        xy = np.ascontiguousarray(self.xy, dtype=np.float64).reshape(-1, 2)  # one layout
+        wh = np.ascontiguousarray(self.wh, dtype=np.float64).reshape(-1, 2)  # for the kernels
         m = xy.shape[0]
         if wh.shape[0] != m:
             raise ValueError(f"Detections: xy has {m} rows but wh has {wh.shape[0]}")

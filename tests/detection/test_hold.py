@@ -98,6 +98,19 @@ def test_box_cover_matches_filling_the_boxes_one_by_one(seed, compiled, monkeypa
     assert not box_cover(np.array([[5.0, 5.0, 0.0, 3.0]]), shape).any()  # empty box
 
 
+def test_box_cover_gives_its_kernel_contiguous_ends(monkeypatch) -> None:
+    """One layout, so numba compiles ``fill_boxes`` once (a strided row would be a second)."""
+    kernel, seen = background.fill_boxes, []
+
+    def checked(out, *ends):  # type: ignore[no-untyped-def]
+        seen.extend(e.flags.c_contiguous for e in ends)
+        return kernel(out, *ends)
+
+    monkeypatch.setattr(background, "fill_boxes", checked)
+    box_cover(np.array([[1.0, 2.0, 5.0, 6.0], [10.0, 3.0, 4.0, 4.0]]), (20, 20))
+    assert seen == [True] * 4
+
+
 @pytest.mark.parametrize("bad", [-1, 2.5, True, "60", 65535])
 def test_hold_must_be_a_whole_number_of_frames(bad) -> None:
     with pytest.raises(ValueError, match="hold"):

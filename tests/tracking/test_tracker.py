@@ -508,3 +508,27 @@ def test_the_compiled_step_equals_the_composition_from_python(seed: int, fps: fl
                      "predicted_xy", "wh", "velocity"):
             np.testing.assert_array_equal(getattr(ta, name), getattr(tb, name))
     np.testing.assert_array_equal(a.speed_prior, b.speed_prior)
+
+
+def test_the_compiled_step_is_given_one_array_layout(monkeypatch) -> None:
+    """The step's kernels see C-contiguous arrays whatever the caller's boxes are (here
+    column slices of one array), so numba compiles each kernel once, not once per layout: a
+    strided ``wh`` would cost a second compilation of the whole step on a first run."""
+    import mvtrack.tracking.tracker as tracker_module
+
+    seen: list[bool] = []
+
+    def checked(kernel):  # type: ignore[no-untyped-def]
+        def call(*args):  # type: ignore[no-untyped-def]
+            seen.extend(a.flags.c_contiguous for a in args if isinstance(a, np.ndarray))
+            return kernel(*args)
+        return call
+
+    for name in ("predict_assign", "update_commit"):
+        monkeypatch.setattr(tracker_module, name, checked(getattr(tracker_module, name)))
+    rng = np.random.default_rng(3)
+    tracker = Tracker(TrackerConfig(fps=25.0))
+    for d in _random_scene(rng, 12, 15, scores=True):
+        boxes = np.hstack([d.xy, d.wh])  # (M, 4): the columns below are strided views
+        tracker.step(Detections(d.frame, boxes[:, :2], boxes[:, 2:], d.score))
+    assert len(seen) > 100 and all(seen)

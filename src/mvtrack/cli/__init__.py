@@ -92,7 +92,15 @@ def main(argv: list[str] | None = None) -> int:
         return status
 
 
+def _compiling() -> None:
+    print("compiling mvtrack's kernels for this machine: once after an install or an upgrade,"
+          " about half a minute", file=sys.stderr, flush=True)
+
+
 def _run(argv: list[str] | None) -> int:
+    from mvtrack.jit import on_first_compile
+
+    on_first_compile(_compiling)
     command = typer.main.get_command(app)
     try:
         with one_line_warnings():

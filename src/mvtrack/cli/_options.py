@@ -216,3 +216,11 @@ def _check_parts(settings: RunSettings, config: Path | None) -> None:
         check_settings(settings, settings.frame_rate or 30.0)
     except (TypeError, ValueError) as exc:
         raise InputError(f"{config}: {exc}") from None
+
+
+def speed_note() -> str:
+    """``; this first run includes compiling the kernels`` after a speed measured in a
+    process that compiled them (:func:`mvtrack.jit.compiled_here`), else nothing."""
+    from mvtrack.jit import compiled_here
+
+    return "; this first run includes compiling the kernels" if compiled_here() else ""

@@ -7,7 +7,7 @@ from typing import Annotated, Any
 
 import typer
 
-from mvtrack.cli._options import Force
+from mvtrack.cli._options import Force, speed_note
 
 
 def run_demo(
@@ -103,6 +103,7 @@ def register(app: typer.Typer) -> None:
         typer.echo(
             f"  tracks {f['tracks']}   MOTA {f['MOTA']:.3f}   IDF1 {f['IDF1']:.3f}   "
             f"ID switches {f['IDSW']}   {f['processing_speed']} frames/s (detect, track, draw)"
+            f"{speed_note()}"
         )
         names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
         typer.echo(f"  files in {out}: {', '.join(names)}")

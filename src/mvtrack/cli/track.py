@@ -24,6 +24,7 @@ from mvtrack.cli._options import (
     Predictor,
     Preset,
     ScoreHigh,
+    speed_note,
     video_settings,
 )
 
@@ -139,7 +140,7 @@ def register(app: typer.Typer) -> None:
         res, summary = run.result, run.summary
         typer.echo(
             f"{summary['frames']} frames, {summary['tracks']} tracks, "
-            f"{summary['processing_speed']} frames/s processed; files in {out}"
+            f"{summary['processing_speed']} frames/s processed{speed_note()}; files in {out}"
         )
         for path in [*run.paths.values(), *tables.values()]:
             typer.echo(f"  {path}")

@@ -21,6 +21,7 @@ from mvtrack.cli._options import (
     check_choice,
     parse_gate,
     parse_optional_number,
+    speed_note,
     tracker_names,
 )
 
@@ -200,7 +201,8 @@ def register(app: typer.Typer) -> None:
         typer.echo(
             f"{done} frames, {frames.num_detections} detections -> {log.track_ids.size} "
             f"tracks, {len(log.to_mot(coasting))} rows ({config_.predictor}, "
-            f"{config_.distance}, {config_.assign}, {config_.fps:g} fps; {ms:.2f} ms/frame) "
+            f"{config_.distance}, {config_.assign}, {config_.fps:g} fps; {ms:.2f} ms/frame"
+            f"{speed_note()}) "
             f"-> {dest}"
         )
         policy = output_policy(config_, coasting, backfill, interpolate, relink, drop_weak,

@@ -222,7 +222,7 @@ def box_cover(tlwh: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.u
     b = np.asarray(tlwh, np.float64).reshape(-1, 4)
     ends = np.concatenate([np.floor(b[:, :2]), np.ceil(b[:, :2] + b[:, 2:])], axis=1)
     np.minimum(np.maximum(ends, 0.0, out=ends), (w, h, w, h), out=ends)
-    x0, y0, x1, y1 = ends.astype(np.intp).T
+    x0, y0, x1, y1 = np.ascontiguousarray(ends.astype(np.intp).T)  # rows, one layout
     bw, bh = np.maximum(x1 - x0, 0), np.maximum(y1 - y0, 0)
     if int((bw * bh).sum()) <= 2 * h * w:  # pixels of the boxes: write them
         out = np.zeros((h, w), np.uint8)

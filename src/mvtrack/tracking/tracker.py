@@ -249,7 +249,7 @@ class Tracker:
             e = np.zeros((0, 2))
             return Pending(dets, np.zeros(0, np.intp), e, e, np.zeros(0, np.intp),
                            np.zeros(0, np.int64), e, cscore, dclass, ps)
-        wh = tab.floats[:, WH]
+        wh = np.ascontiguousarray(tab.floats[:, WH])  # one layout: one compiled kernel
         stand = standing(tab.ints, tab.floats)  # a held track takes only what lies in its box
         if self.fused:  # the same steps in one compiled call (mvtrack.tracking.step)
             x, P, mu, centre, _, std, det_index = predict_assign(
