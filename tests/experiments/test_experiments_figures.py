@@ -17,7 +17,7 @@ from mvtrack.experiments.stats import binomial_ci
 from mvtrack.sim.nine_vehicles import x4_nine_vehicles
 from mvtrack.types import TrackFrame
 from mvtrack.viz.colors import PALETTE, contrast_ratio
-from mvtrack.viz.labels import place_labels
+from mvtrack.viz.labels import crowd_labels, place_labels
 from mvtrack.viz.plots import TrackRows, grouped_bars, trajectory_figure
 
 
@@ -128,6 +128,31 @@ def test_place_labels_on_an_image_axes_do_not_overlap_once_drawn() -> None:
         assert len(boxes) >= 20
         assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])
     assert all(t.get_zorder() > 5 for t in placed)  # over the paths (zorder 4–5)
+
+
+def test_crowd_labels_join_four_or_more_ends_at_one_spot_and_keep_the_rest() -> None:
+    anchors = np.array([[10.0, 10.0], [11.0, 10.0], [10.0, 12.0], [12.0, 11.0], [10.5, 10.5],
+                        [50.0, 50.0], [51.0, 50.0], [80.0, 20.0]])
+    texts = [str(i) for i in range(8)]
+    colors = ["red"] * 5 + ["blue", "green", "red"]
+    xy, out, cols = crowd_labels(anchors, texts, colors, radius=3.0)
+    assert out == ["5 tracks: 0, 1, 2, …", "5", "6", "7"]
+    np.testing.assert_allclose(xy[0], anchors[:5].mean(axis=0))
+    np.testing.assert_array_equal(xy[1:], anchors[5:])
+    assert cols == ["red", "blue", "green", "red"]  # the crowd's shared colour
+    _, out, cols = crowd_labels(anchors, texts, ["red"] * 4 + ["blue"] * 4, 3.0, mixed="k")
+    assert out[0].startswith("5 tracks") and cols[0] == "k"  # colours differ: ``mixed``
+    _, out, _ = crowd_labels(anchors[:3], texts[:3], colors[:3], radius=3.0)
+    assert out == ["0", "1", "2"]  # three are not a crowd
+
+
+def test_a_trajectory_figure_labels_a_crowd_of_ends_once() -> None:
+    paths = {i: np.column_stack([np.linspace(0, 100, 5), np.full(5, 50.0 + 0.1 * i)])
+             for i in range(1, 9)}  # eight tracks that end at one spot
+    paths[9] = np.array([[10.0, 10.0], [60.0, 20.0]])
+    fig = trajectory_figure(_rows(paths), (200, 100))
+    texts = sorted(t.get_text() for t in fig.axes[0].texts)
+    assert texts == ["8 tracks: 1, 2, 3, …", "9"]
 
 
 def _rows(paths: dict[int, np.ndarray]) -> TrackRows:

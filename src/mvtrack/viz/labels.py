@@ -10,6 +10,47 @@ from mvtrack.viz.colors import halo
 FloatArray = NDArray[np.float64]
 
 
+def crowd_labels(
+    anchors: FloatArray, texts: list[str], colors: list[object], radius: float,
+    min_group: int = 4, shown: int = 3, mixed: object = "black",
+) -> tuple[FloatArray, list[str], list[object]]:
+    """One label for each crowd of anchors: ``min_group`` or more anchors within ``radius``
+    (data units) of the crowd's first anchor become one label, ``"n tracks: a, b, c, …"`` with the
+    first ``shown`` texts, at their mean, in their colour when they share one (else
+    ``mixed``). The anchors are taken in the order given, each joining the first crowd it
+    reaches; the others keep their own label.
+
+    Where many short tracks end at one place (the fragments of a vehicle that waits, the
+    tracks that leave at one point of the image's edge), their IDs would otherwise fan out
+    around it on leader lines and hide the paths.
+    """
+    anchors = np.asarray(anchors, float).reshape(-1, 2)
+    leaders: list[int] = []
+    members: list[list[int]] = []
+    for i, a in enumerate(anchors):
+        near = [g for g, j in enumerate(leaders) if np.hypot(*(a - anchors[j])) <= radius]
+        if near:
+            members[near[0]].append(i)
+        else:
+            leaders.append(i)
+            members.append([i])
+    out_xy, out_text, out_color = [], [], []
+    for group in members:
+        if len(group) < min_group:
+            for i in group:
+                out_xy.append(anchors[i])
+                out_text.append(texts[i])
+                out_color.append(colors[i])
+            continue
+        names = [texts[i] for i in group]
+        listed = ", ".join(names[:shown]) + (", …" if len(names) > shown else "")
+        same = {repr(colors[i]) for i in group}
+        out_xy.append(anchors[group].mean(axis=0))
+        out_text.append(f"{len(group)} tracks: {listed}")
+        out_color.append(colors[group[0]] if len(same) == 1 else mixed)
+    return np.array(out_xy, float).reshape(-1, 2), out_text, out_color
+
+
 def place_labels(
     ax,
     anchors: FloatArray,

@@ -26,7 +26,7 @@ from mvtrack.viz.colors import (
     halo,
     relative_luminance,
 )
-from mvtrack.viz.labels import place_labels
+from mvtrack.viz.labels import crowd_labels, place_labels
 
 __all__ = [
     "FAILURE_COLOR",
@@ -145,7 +145,9 @@ def trajectory_figure(
         Colour of each group (default: the palette in the groups' natural order, e.g. V1, V2,
         …, V10; :data:`~mvtrack.viz.colors.FAILURE_COLOR` and a dotted line for ``failure_group``).
     labels : bool
-        Label each path's end with its track ID.
+        Label each path's end with its track ID; four or more paths ending within 2 % of the
+        image of one another share one label, their number and first IDs
+        (:func:`~mvtrack.viz.labels.crowd_labels`).
     legend_title : str, optional
         Title of the legend (shown when ``groups`` or ``truth`` is given).
     failure_group : str
@@ -209,7 +211,10 @@ def trajectory_figure(
             seen = np.flatnonzero((p[:, 0] >= 0) & (p[:, 0] <= w) & (p[:, 1] >= 0)
                                   & (p[:, 1] <= h))
             ends.append(p[seen[-1]] if seen.size else np.clip(p[-1], 0, [w, h]))
-        place_labels(ax, np.array(ends), [str(int(ids[i])) for i in keep], track_color)
+        # many paths ending at one spot (2 % of the image): one label "n tracks: a, b, …"
+        xy, texts, cols = crowd_labels(np.array(ends), [str(int(ids[i])) for i in keep],
+                                       track_color, 0.02 * max(w, h), mixed=TRUTH_COLOR)
+        place_labels(ax, xy, texts, cols)
     return fig
 
 
