@@ -47,6 +47,7 @@ KERNEL_MODULES = (
     "tracking/step.py",
     "detection/background.py",
     "detection/colourbg.py",
+    "detection/ghosts.py",
     "detection/wings.py",
     "detection/ncc.py",
     "detection/splitmerge.py",

@@ -134,3 +134,28 @@ def test_count_held_matches_counting_frame_by_frame(compiled, hold) -> None:
         ref = np.where(inside > 0, np.minimum(ref + 1, min(hold + 1, 65535)), 0)
         np.testing.assert_array_equal(held, ref)
         np.testing.assert_array_equal(learnt, np.where((inside == 0) | (ref > hold), 255, 0))
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_hold_boxes_matches_count_held_of_box_cover(seed, compiled) -> None:
+    """The fused kernel against :func:`box_cover` then :func:`count_held` (plain NumPy and
+    the kernel checked above), frame after frame; over twice the image's pixels it leaves
+    the work to them."""
+    fn = background.hold_boxes if compiled else background.hold_boxes.py_func
+    rng = np.random.default_rng(seed)
+    shape = (23, 31)
+    held, ref_held = np.zeros(shape, np.uint16), np.zeros(shape, np.uint16)
+    cover = np.empty(shape, np.uint8)
+    for _ in range(5):
+        n = int(rng.integers(0, 6))
+        boxes = np.column_stack([rng.uniform(-8, 33, (n, 2)), rng.uniform(0, 14, (n, 2))])
+        learnt, ref = np.empty(shape, np.uint8), np.empty(shape, np.uint8)
+        assert fn(np.ascontiguousarray(boxes), cover, held, 2, learnt)
+        count_held.py_func(box_cover(boxes, shape), ref_held, 2, ref)
+        np.testing.assert_array_equal(held, ref_held)
+        np.testing.assert_array_equal(learnt, ref)
+    many = np.array([[-1.0, -1.0, 40.0, 30.0]] * 3)
+    before = held.copy()
+    assert not fn(many, cover, held, 2, learnt)
+    np.testing.assert_array_equal(held, before)

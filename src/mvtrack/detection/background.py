@@ -115,6 +115,7 @@ class DisturbanceMap(FrontEnd):
         self._thr: NDArray[np.float32] | None = None
         self._held_boxes = np.zeros((0, 4))  # tlwh of the tracks' boxes predicted for now
         self._held_for: NDArray[np.uint16] | None = None  # frames each pixel has been held
+        self._cover = np.zeros((0, 0), np.uint8)  # the held boxes' pixels (hold_boxes)
 
     def beta(self, k: int) -> float:
         """Learning rate :math:`\\beta_k = \\max(1/(k+1), \\beta_{\\min})` (SPEC §1.1 [R])."""
@@ -172,24 +173,24 @@ class DisturbanceMap(FrontEnd):
         """The mask of the pixels :math:`B` learns this frame under ``hold``: those outside
         every held box, and those held ``hold`` frames in a row (the slow path); the count of
         the frames each pixel has been held is kept in one compiled pass
-        (:func:`count_held`)."""
+        (:func:`count_held`; with the boxes' cover in the same pass, :func:`hold_boxes`, when
+        the boxes do not number over twice the image's pixels)."""
         shape = self._fg.shape
         if self._held_for is None or self._held_for.shape != shape:
             self._held_for = np.zeros(shape, np.uint16)
+            self._cover = np.empty(shape, np.uint8)
         learnt = np.empty(shape, np.uint8)
-        count_held(box_cover(self._held_boxes, shape), self._held_for, int(self.hold), learnt)
+        boxes = np.ascontiguousarray(self._held_boxes, np.float64).reshape(-1, 4)
+        if not hold_boxes(boxes, self._cover, self._held_for, int(self.hold), learnt):
+            count_held(box_cover(boxes, shape), self._held_for, int(self.hold), learnt)
         return learnt
 
     def _remove_ghosts(self, grey: NDArray[np.uint8]) -> None:
         """Reset the pixels of the ghost blobs of the raw mask to the frame (option
         ``ghost_every``); they leave the mask."""
-        from mvtrack.detection.ghosts import ghost_pixels
+        from mvtrack.detection.ghosts import reset_ghosts
 
-        sel = ghost_pixels(self._fg, grey, cv2.convertScaleAbs(self.background))  # B_{k-1}
-        if sel is None:
-            return
-        self.background[sel] = grey[sel]
-        self._fg[sel] = 0
+        reset_ghosts(self._fg, grey, self.background)  # the edges of B_{k-1}
 
 
 @kernel
@@ -245,6 +246,38 @@ def fill_boxes(out: NDArray[np.uint8], x0: NDArray[np.intp], y0: NDArray[np.intp
         for y in range(y0[k], y1[k]):
             for x in range(x0[k], x1[k]):
                 out[y, x] = 255
+
+
+@kernel
+def hold_boxes(tlwh: NDArray[np.float64], cover: NDArray[np.uint8], held: NDArray[np.uint16],
+               hold: int, learnt: NDArray[np.uint8]) -> bool:
+    """:func:`count_held` of :func:`box_cover` ``(tlwh, held.shape)`` in one compiled pass:
+    ``cover`` (scratch, the shape of ``held``) gets the boxes' pixels, then ``held`` and
+    ``learnt`` their counts. Returns False, and writes nothing, when the boxes' pixels number
+    over twice the image's (:func:`box_cover` takes prefix sums there); a box with a NaN
+    side covers nothing."""
+    h, w = held.shape
+    k = tlwh.shape[0]
+    ends = np.zeros((k, 4), np.intp)
+    total = 0
+    for i in range(k):
+        x0, y0 = np.floor(tlwh[i, 0]), np.floor(tlwh[i, 1])
+        x1, y1 = np.ceil(tlwh[i, 0] + tlwh[i, 2]), np.ceil(tlwh[i, 1] + tlwh[i, 3])
+        if np.isnan(x0) or np.isnan(y0) or np.isnan(x1) or np.isnan(y1):
+            continue
+        x0, x1 = min(max(x0, 0.0), float(w)), min(max(x1, 0.0), float(w))
+        y0, y1 = min(max(y0, 0.0), float(h)), min(max(y1, 0.0), float(h))
+        ends[i, 0], ends[i, 1], ends[i, 2], ends[i, 3] = int(x0), int(y0), int(x1), int(y1)
+        total += max(int(x1) - int(x0), 0) * max(int(y1) - int(y0), 0)
+    if total > 2 * h * w:
+        return False
+    cover[:, :] = 0
+    for i in range(k):
+        for y in range(ends[i, 1], ends[i, 3]):
+            for x in range(ends[i, 0], ends[i, 2]):
+                cover[y, x] = 255
+    count_held(cover, held, hold, learnt)
+    return True
 
 
 class FrameDifference(FrontEnd):
