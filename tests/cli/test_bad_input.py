@@ -7,6 +7,7 @@ tell apart. An empty detection file is not an error: one warning line and an emp
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -115,3 +116,19 @@ def test_ffmpeg_lines_stay_off_the_terminal_unless_verbose(tmp_path: Path) -> No
     lines = loud.stderr.splitlines()
     assert len(lines) > 1 and lines[-1] == quiet.stderr.strip(), loud.stderr
     assert not (tmp_path / "q").exists() and not (tmp_path / "v").exists()
+
+
+def test_bad_detection_file_on_a_fresh_install_is_told_before_compiling(tmp_path: Path) -> None:
+    """On a machine whose compile cache is empty, a bad file is still one line, at once: the
+    file is read before the tracker (whose settings are checked by building one) compiles."""
+    det = tmp_path / "det.txt"
+    det.write_text(OK_DET + DET_CASES["fractional frame"][0] + "\n", encoding="utf-8")
+    out = tmp_path / "out"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "empty-cache")}
+    proc = subprocess.run(
+        [sys.executable, "-m", "mvtrack", "track-detections", str(det), "--out", str(out)],
+        capture_output=True, text=True, env=env, timeout=300,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr == f"error: {det}:2: frame (column 1) is 0.5, not an integer\n"
+    assert not out.exists()

@@ -171,10 +171,12 @@ def register(app: typer.Typer) -> None:
         table = dict(load_config(config).tracker) if config is not None else {}
         table.update({k: v for k, v in changes.items() if k in given})
         table.setdefault("fps", 30.0)
+        check_folder(out)
+        # the file before the tracker's settings, which are checked by building a tracker:
+        # a bad file is told at once, not after a first run's half minute of compiling
+        frames = read_detections(detfile)
         check_tracker(table, tracker_names(given, config))
         config_ = build_tracker_config(RunSettings(tracker=table), float(table["fps"]))
-        check_folder(out)
-        frames = read_detections(detfile)
         make_folder(out)  # before the work: a folder that cannot be made stops it now
         t0 = time.perf_counter()
         bar = tqdm(total=len(frames), desc="tracking", unit="frame",
