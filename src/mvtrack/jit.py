@@ -55,6 +55,7 @@ KERNEL_MODULES = (
     "detection/kinds.py",
     "detection/labelling.py",
     "video/relink.py",
+    "video/stopped.py",
 )
 
 __all__ = [
