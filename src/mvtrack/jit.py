@@ -51,9 +51,11 @@ KERNEL_MODULES = (
     "detection/wings.py",
     "detection/ncc.py",
     "detection/splitmerge.py",
+    "detection/claims.py",
     "detection/kinds.py",
     "detection/labelling.py",
     "video/relink.py",
+    "video/stopped.py",
 )
 
 __all__ = [

@@ -21,8 +21,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack.detection.claims import shared_blob
 from mvtrack.detection.feedback import predicted_boxes
-from mvtrack.detection.splitmerge import PLAIN, blob_claims, split_merge, usable_predictions
+from mvtrack.detection.splitmerge import PLAIN, split_merge
 from mvtrack.types import Detections, TrackFrame
 
 Image = NDArray[np.uint8]
@@ -63,7 +64,7 @@ class TrackSplit:
         dets = self.inner(frame, index)
         mask = getattr(self.inner, "mask", None)
         if mask is None or len(dets) == 0 or len(self.predicted) == 0 or (
-            not self.merge and not self._shared(dets.tlwh)
+            not self.merge and not self._shared(dets)
         ):
             self.flags = np.full(len(dets), PLAIN, np.int8)
             return dets
@@ -74,16 +75,13 @@ class TrackSplit:
             return dets  # nothing split or merged: the blobs as they were (their areas kept)
         return Detections.from_tlwh(dets.frame, boxes)
 
-    def _shared(self, blobs: Any) -> bool:
+    def _shared(self, dets: Detections) -> bool:
         """Whether a blob is claimed by two or more predicted boxes (without merging,
         :func:`~mvtrack.detection.splitmerge.split_merge` changes nothing otherwise): its own
-        test, on the boxes it would use."""
-        pred = usable_predictions(self.predicted)
-        if len(pred) < 2:
-            return False
-        boxes = np.asarray(blobs, np.float64).reshape(-1, 4)
-        home, claims = blob_claims(boxes, pred, self.cover)
-        return bool((np.bincount(home[claims], minlength=len(boxes)) >= 2).any())
+        test, on the boxes it would use, in one compiled call
+        (:func:`~mvtrack.detection.claims.shared_blob`)."""
+        pred = np.ascontiguousarray(self.predicted, np.float64).reshape(-1, 4)
+        return bool(shared_blob(dets.xy, dets.wh, pred, self.cover))
 
     def observe(self, dets: Detections, tracks: TrackFrame) -> None:
         """Keep the confirmed tracks' boxes predicted for the next frame (and hand the

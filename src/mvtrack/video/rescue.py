@@ -27,8 +27,15 @@ from numpy.typing import NDArray
 
 from mvtrack.analytics.outputs import STOPPED_SIDES_PER_S
 from mvtrack.errors import InputError
+from mvtrack.tracking.lifecycle import LAST_X, LAST_Y, N_FLOAT, N_INT, STATE, TID, UID
 from mvtrack.types import Detections, TrackFrame, TrackState
 from mvtrack.video.loop import NO_SCORES, HeldScores, RescueFn
+from mvtrack.video.stopped import (
+    accept_stopped,
+    cached_matches,
+    missed_places,
+    standing_pieces,
+)
 
 if TYPE_CHECKING:
     from mvtrack.detection.template import TemplateBank
@@ -38,6 +45,8 @@ IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
 _NO_UIDS = np.zeros(0, np.int64)
 _NO_VALUES = np.zeros(0, np.float64)
+#: a template bank without boxes: its sentinel row only
+_EMPTY_BANK = (np.array([np.iinfo(np.int64).max], np.int64), np.full((1, 13), np.nan))
 
 
 def held_scores(
@@ -122,6 +131,25 @@ def _member(a: IntArray, sorted_b: IntArray) -> NDArray[np.bool_]:
         return np.zeros(a.size, bool)
     pos = np.minimum(np.searchsorted(sorted_b, a), sorted_b.size - 1)
     return sorted_b[pos] == a
+
+
+def table_arrays(table: Any) -> tuple[IntArray, FloatArray]:
+    """A track table's integer and float columns (:mod:`mvtrack.tracking.lifecycle`),
+    C-contiguous, for the kernels of :mod:`mvtrack.video.stopped`; a table that is not a
+    :class:`~mvtrack.tracking.table.TrackTable` gives its ``uid``, ``track_id``, ``state``
+    and ``last_xy`` (the others zero)."""
+    ints, floats = getattr(table, "ints", None), getattr(table, "floats", None)
+    if ints is not None and floats is not None:
+        return np.ascontiguousarray(ints, np.int64), np.ascontiguousarray(floats, np.float64)
+    uid = np.asarray(table.uid, np.int64).reshape(-1)
+    ints = np.zeros((uid.size, N_INT), np.int64)
+    ints[:, UID] = uid
+    for col, name in ((TID, "track_id"), (STATE, "state")):
+        if getattr(table, name, None) is not None:
+            ints[:, col] = getattr(table, name)
+    floats = np.zeros((uid.size, N_FLOAT))
+    floats[:, LAST_X:LAST_Y + 1] = table.last_xy
+    return ints, floats
 
 
 def _uids_of_ids(table: Any, ids: IntArray) -> IntArray:
@@ -209,51 +237,42 @@ class StoppedVehicleRescuer:
 
         def rescue(uids: Any, predicted_xy: Any, wh: Any) -> tuple[Any, Any]:
             search = self.inner.search(image)  # only on frames with missed tracks
-            uids = np.asarray(uids, np.int64).reshape(-1)
-            wh = np.asarray(wh, np.float64).reshape(-1, 2)
-            order = np.argsort(tab.uid)
-            at = order[np.searchsorted(tab.uid[order], uids)]
-            box = self._template_boxes(uids)
+            uids = np.ascontiguousarray(uids, np.int64).reshape(-1)
+            wh = np.ascontiguousarray(wh, np.float64).reshape(-1, 2)
+            ints, floats = table_arrays(tab)
+            # each track's row, last measurement, template box and the place where its
+            # vehicle was last seen (the box's centre when the last measurement lies within
+            # one box length of it: the fragments of a fading vehicle wander inside its box)
+            at, last, box, centre = missed_places(ints, floats, uids, *self._bank_rows(tab))
             # every missed track is searched, the ones that cannot stand too: the bank cuts a
             # template from its kept frame only when it is searched (the next frame's search
             # of a track that slowed down needs it)
-            found, xy, score = self._find(search, uids, tab.last_xy[at], box, wh, image)
-            # and it must have been able to stop there: a vehicle missed while it drives on
-            # (one of the road's colour) leaves the road behind it to match its template
-            found &= self._could_stand(tab, at, wh, box)
-            if not found.any():
-                return found, xy
-            # and no detection of about its size may cover it (a detected object has not
-            # faded); a blob several times its size is vehicles merged into one (a queue that
-            # starts again, its vehicles still close): the vehicle is found inside it. So is
-            # a vehicle that was held by its template in the last frame (it stands) under a
-            # blob that reaches beyond its template's box: a car passing close by has merged
-            # with the pieces of it that stay foreground
-            if len(dets) and found.any():
-                lo, hi = dets.xy - dets.wh / 2, dets.xy + dets.wh / 2
-                inside = ((xy[:, None, :] >= lo[None]) & (xy[:, None, :] <= hi[None])).all(2)
-                area = wh.prod(axis=1)
-                merged = dets.wh.prod(axis=1)[None, :] > self.MERGED * area[:, None]
-                bank = getattr(self.inner, "bank", None)
-                stood = (tab.state[at] == int(TrackState.STOPPED)
-                         if self.pieces and hasattr(bank, "boxes") else np.zeros(uids.size, bool))
-                if stood.any():
-                    merged[stood] |= ~self._within(box[stood], dets)
-                found &= ~(inside & ~merged).any(axis=1)
-            xy[~found] = np.nan
-            self._accepted = (uids[found], score[found])
+            found, xy, score = self._find(search, uids, last, centre, wh, image)
+            if found.any():
+                # it must have been able to stop there (a vehicle missed while it drives on
+                # leaves the road behind it to match its template), and no detection of
+                # about its size may cover it (a detected object has not faded); a blob
+                # several times its size is vehicles merged into one (a queue that starts
+                # again): the vehicle is found inside it. So is a vehicle held by its template
+                # in the last frame (it stands) under a blob that reaches beyond its
+                # template's box: a car passing close by has merged with its pieces
+                velocity, frames = self._motion(tab, at)
+                stood = ints[at, STATE] == int(TrackState.STOPPED) if self._boxes() else \
+                    np.zeros(uids.size, bool)
+                accept_stopped(found, xy, velocity, frames, wh, box, stood, dets.xy, dets.wh,
+                               self.MERGED, self.max_shift)
+                self._accepted = (uids[found], score[found])
             return found, xy
 
         return rescue
 
-    def _find(self, search: RescueFn, uids: IntArray, last: FloatArray, box: FloatArray,
+    def _find(self, search: RescueFn, uids: IntArray, last: FloatArray, centre: FloatArray,
               wh: FloatArray, image: Image) -> tuple[NDArray[np.bool_], FloatArray, FloatArray]:
         """The search of :meth:`callback`: around where each vehicle was last seen
-        (:meth:`_centres`), and around its last measurement where that place differs and the
+        (``centre``), and around its last measurement where that place differs and the
         vehicle is not found there."""
         # a stopped vehicle stands where it was last measured: search around that place,
         # not around the prediction, which keeps drifting with the last velocity estimate
-        centre = self._centres(last, box)
         found, xy, score = self._search(search, uids, centre, wh, image)
         again = ~found & (centre != last).any(axis=1)
         if again.any():
@@ -261,29 +280,36 @@ class StoppedVehicleRescuer:
             found[again], xy[again], score[again] = f2, xy2, s2
         return found, xy, score
 
-    def _template_boxes(self, uids: IntArray) -> FloatArray:
-        """(K, 4) the template bank's box of each track (centre x, y, w, h; NaN without one,
-        and for all of them with a bank that keeps no boxes)."""
+    def _boxes(self) -> bool:
+        """Whether the pieces of standing vehicles are held (a bank that keeps boxes)."""
+        return self.pieces and hasattr(getattr(self.inner, "bank", None), "boxes")
+
+    def _bank_rows(self, tab: Any) -> tuple[IntArray, FloatArray]:
+        """The template bank's sorted uids (sentinel last) and rows, box in columns 0–3 (a
+        :class:`~mvtrack.detection.track_boxes.TrackBoxes`' own; for another bank with
+        ``boxes``, its boxes of the tracks of ``tab``); a bank without boxes gives none (NaN
+        boxes)."""
         bank = getattr(self.inner, "bank", None)
         if bank is None or not hasattr(bank, "boxes"):
-            return np.full((uids.size, 4), np.nan)
-        return np.asarray(bank.boxes(uids), np.float64)
+            return _EMPTY_BANK
+        u, f = getattr(bank, "_u", None), getattr(bank, "_f", None)
+        if u is not None and f is not None:
+            return u, f
+        uids = np.unique(np.asarray(tab.uid, np.int64))
+        boxes = np.asarray(bank.boxes(uids), np.float64).reshape(-1, 4)
+        return np.append(uids, _EMPTY_BANK[0]), np.vstack([boxes, _EMPTY_BANK[1][:, :4]])
 
-    def _could_stand(self, tab: Any, at: IntArray, wh: FloatArray, box: FloatArray
-                     ) -> NDArray[np.bool_]:
-        """:func:`could_stand` for the tracks at rows ``at`` of ``tab``: their filters'
-        velocities, the frames since their last measurement, the larger of their box ``wh``
-        and their template's ``box`` (the vehicle's last full-size box; a fading vehicle's
-        blob shrinks). True for all of them with a tracker that does not give these."""
+    def _motion(self, tab: Any, at: IntArray) -> tuple[FloatArray, IntArray]:
+        """The velocities of the tracks at rows ``at`` of ``tab`` and the frames since their last
+        measurement, for :func:`~mvtrack.video.stopped.accept_stopped`; NaN velocities (they
+        could stand) with a tracker that does not give them."""
         tr = self.tracker
         predictor, state = getattr(tr, "predictor", None), getattr(tr, "pstate", None)
         steps = getattr(tr, "steps", None)
         if predictor is None or state is None or steps is None:
-            return np.ones(at.size, bool)
-        velocity = np.asarray(predictor.velocity(state), np.float64)[at]
-        template = box[:, 2:]
-        size = np.where(np.isfinite(template), np.maximum(template, wh), wh)
-        return could_stand(velocity, steps - tab.last_k[at], size)
+            return np.full((at.size, 2), np.nan), np.zeros(at.size, np.int64)
+        velocity = np.ascontiguousarray(np.asarray(predictor.velocity(state), np.float64)[at])
+        return velocity, np.ascontiguousarray(steps - tab.last_k[at], np.int64)
 
     def fragments(self, image: Image, dets: Detections) -> NDArray[np.bool_]:
         """The detections of this frame that belong to a vehicle that stands: to be left out
@@ -320,34 +346,18 @@ class StoppedVehicleRescuer:
         """
         out = np.zeros(len(dets), bool)
         bank = getattr(self.inner, "bank", None)
-        if not (self.pieces and len(dets) and hasattr(bank, "boxes") and len(bank)):
+        if not (self.pieces and len(dets) and self._standing.size and hasattr(bank, "boxes")
+                and len(bank)):
             return out
         tab = self.tracker.tracks
-        live = np.flatnonzero((tab.track_id > 0) & _member(tab.uid, self._standing))
-        if live.size == 0:
+        uids, box, inside = standing_pieces(*table_arrays(tab), self._standing,
+                                            *self._bank_rows(tab), dets.xy, dets.wh, self.max_shift)
+        if uids.size == 0:
             return out
-        uids = tab.uid[live]
-        box = bank.boxes(uids)  # centre x, y, w, h; NaN for tracks without a template
-        half = box[:, 2:] / 2
-        # the vehicle was last measured at its template's place (a fragment of it)
-        reach = half + box[:, 2:].max(axis=1, keepdims=True)
-        here = (np.abs(tab.last_xy[live] - box[:, :2]) <= reach).all(axis=1)  # NaN: False
-        inside = self._within(box, dets) & here[:, None]  # (tracks, detections)
-        cand = np.flatnonzero(inside.any(axis=1))
-        if cand.size == 0:
-            return out
-        found, xy, score = self._search(self.inner.search(image), uids[cand], box[cand, :2],
-                                        box[cand, 2:])
-        self._found = (image, uids[cand][found], xy[found], score[found])
-        return inside[cand[found]].any(axis=0)
-
-    def _within(self, box: FloatArray, dets: Detections) -> NDArray[np.bool_]:
-        """(K, M): detection ``m`` lies inside box ``k`` (centre x, y, w, h) widened by
-        ``max_shift`` px on every side (False for a NaN box)."""
-        half = box[:, None, 2:] / 2 + self.max_shift
-        d_half = dets.wh / 2
-        return ((dets.xy - d_half)[None] >= box[:, None, :2] - half).all(axis=2) & (
-            (dets.xy + d_half)[None] <= box[:, None, :2] + half).all(axis=2)
+        found, xy, score = self._search(self.inner.search(image), uids, box[:, :2],
+                                        box[:, 2:])
+        self._found = (image, uids[found], xy[found], score[found])
+        return inside[found].any(axis=0)
 
     def _search(
         self, search: RescueFn, uids: IntArray, centre: NDArray[np.float64], wh: Any,
@@ -357,49 +367,31 @@ class StoppedVehicleRescuer:
         Returns ``found``, ``xy`` and the NCC ``score`` of each track. The tracks that
         :meth:`fragments` found in ``image`` (searched around the same centre, the box of
         their template) are not searched again."""
-        done = np.zeros(uids.size, bool)
         cache = self._found
-        if image is not None and cache is not None and cache[0] is image and cache[1].size:
-            order = np.argsort(cache[1])
-            pos = np.minimum(np.searchsorted(cache[1][order], uids), cache[1].size - 1)
-            done = cache[1][order][pos] == uids
-            done &= (np.abs(cache[2][order][pos] - centre) <= self.max_shift).all(axis=1)
         found = np.zeros(uids.size, bool)
         xy = np.full((uids.size, 2), np.nan)
         score = np.full(uids.size, np.nan)
-        if done.any():
-            hit = order[pos[done]]
-            found[done], xy[done], score[done] = True, cache[2][hit], cache[3][hit]
-        rest = ~done
-        if rest.any():
+        rest = None
+        if image is not None and cache is not None and cache[0] is image and cache[1].size:
+            hit = cached_matches(cache[1], cache[2], uids, np.ascontiguousarray(centre),
+                                 self.max_shift)
+            found = hit >= 0
+            if found.any():
+                xy[found], score[found] = cache[2][hit[found]], cache[3][hit[found]]
+                rest = ~found
+        if rest is None:  # nothing taken from the cache: search them all
+            f_sub, xy_sub, s_sub = search(uids, centre, wh)
+            xy[:], score[:] = xy_sub, s_sub
+            d = xy - centre  # the match must sit where the vehicle was last seen
+            found = np.asarray(f_sub, bool) & (np.hypot(d[:, 0], d[:, 1]) <= self.max_shift)
+        elif rest.any():
             f_sub, xy_sub, s_sub = search(uids[rest], centre[rest],
                                           np.asarray(wh, np.float64).reshape(-1, 2)[rest])
-            found[rest] = np.array(f_sub, bool)
-            xy[rest] = np.array(xy_sub, np.float64)
-            score[rest] = np.array(s_sub, np.float64)
-            if found[rest].any():  # the match must sit where the vehicle was last seen
-                d = xy[rest] - centre[rest]
-                found[rest] &= np.hypot(d[:, 0], d[:, 1]) <= self.max_shift
+            xy[rest], score[rest] = xy_sub, s_sub
+            d = xy[rest] - centre[rest]
+            found[rest] = np.asarray(f_sub, bool) & (
+                np.hypot(d[:, 0], d[:, 1]) <= self.max_shift)
         return found, xy, score
-
-    def _centres(self, last: FloatArray, box: FloatArray) -> FloatArray:
-        """Where each missed track's vehicle was last seen: the centre of its template's box
-        when its last measurement lies inside that box, else the last measurement.
-
-        A vehicle that stops fades into the background over tens of frames; meanwhile its
-        blob shrinks to fragments at its edges (the pixels that still differ most from the
-        background), and the track follows their centroids, up to half a box length off the
-        vehicle's centre (6 px of a 16 px vehicle in ``intersection``). The template keeps
-        the vehicle's last full-size box, so the match lies at that box's centre, farther than
-        ``max_shift`` from the last fragment: searched around the fragment it was refused.
-        ``box`` (K, 4): the templates' boxes (:meth:`_template_boxes`; NaN: the last
-        measurement).
-        """
-        # within one box length of the box (a fragment at its edge, or a detection of a
-        # vehicle passing close by that the stopped track took for one frame)
-        reach = box[:, 2:] / 2 + box[:, 2:].max(axis=1, keepdims=True)
-        inside = (np.abs(last - box[:, :2]) <= reach).all(axis=1)  # NaN: False
-        return np.where(inside[:, None], box[:, :2], last)
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
         """Feed the template bank; set :attr:`held_scores` for this frame's rows; keep the
