@@ -51,3 +51,28 @@ def test_shared_blob_matches_blob_claims(compiled: bool) -> None:
         assert bool(shared(xy, wh, pred, cover)) is want
         hits += want
     assert 20 < hits < 580  # both answers are exercised
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("seed", range(5))
+def test_distinct_boxes_keeps_the_larger_of_two_that_share_half(seed, compiled) -> None:
+    """Against the rule written with NumPy: a box is dropped when it shares ``same`` of its
+    area with a larger box, or with an earlier box of the same area."""
+    from mvtrack.detection.splitmerge import distinct_boxes
+
+    fn = distinct_boxes if compiled else distinct_boxes.py_func
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(0, 9))
+    pred = np.column_stack([rng.uniform(0, 30, (n, 2)), rng.uniform(2, 20, (n, 2))])
+    if n > 2:
+        pred[1] = pred[0]  # equal areas: the earlier is kept
+    area = pred[:, 2] * pred[:, 3]
+    lo, hi = pred[:, :2], pred[:, :2] + pred[:, 2:]
+    side = np.clip(np.minimum(hi[:, None], hi[None]) - np.maximum(lo[:, None], lo[None]), 0, None)
+    share = side.prod(axis=2) / np.minimum(area[:, None], area[None])
+    np.fill_diagonal(share, 0.0)
+    order = np.arange(n)
+    smaller = (area[:, None] < area[None]) | ((area[:, None] == area[None])
+                                              & (order[:, None] > order[None]))
+    want = pred[~((share >= 0.5) & smaller).any(axis=1)]
+    np.testing.assert_array_equal(fn(np.ascontiguousarray(pred), 0.5), want)

@@ -13,20 +13,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mvtrack.detection.splitmerge import overlap_areas
+from mvtrack.detection.splitmerge import SAME, distinct_boxes, overlap_areas
 from mvtrack.jit import kernel
 
 FloatArray = NDArray[np.float64]
 
-#: two predicted boxes sharing this much of the smaller one's area are one (``_distinct``)
-SAME = 0.5
-
-
 @kernel
 def usable_boxes(predicted: FloatArray) -> FloatArray:
     """:func:`~mvtrack.detection.splitmerge.usable_predictions` without a size prior: the
-    finite boxes (tlwh, C-contiguous) of positive size, and of two that share :data:`SAME` of
-    the smaller one's area the larger (the later of two of equal area)."""
+    finite boxes (tlwh, C-contiguous) of positive size, without duplicates
+    (:func:`~mvtrack.detection.splitmerge.distinct_boxes`)."""
     n = predicted.shape[0]
     ok = np.zeros(n, np.bool_)
     m = 0
@@ -43,27 +39,7 @@ def usable_boxes(predicted: FloatArray) -> FloatArray:
         if ok[j]:
             pred[i] = predicted[j]
             i += 1
-    if m < 2:
-        return pred
-    area = pred[:, 2] * pred[:, 3]
-    inter = np.empty((m, m))
-    overlap_areas(pred, pred, inter)
-    drop = np.zeros(m, np.bool_)
-    for a in range(m):
-        for b in range(m):
-            if a == b:
-                continue
-            smaller = area[a] < area[b] or (area[a] == area[b] and a > b)
-            if smaller and inter[a, b] / min(area[a], area[b]) >= SAME:
-                drop[a] = True
-                break
-    out = np.empty((m - drop.sum(), 4))
-    i = 0
-    for a in range(m):
-        if not drop[a]:
-            out[i] = pred[a]
-            i += 1
-    return out
+    return distinct_boxes(pred, SAME)
 
 
 @kernel

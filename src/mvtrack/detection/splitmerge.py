@@ -280,18 +280,37 @@ def split_by_width(
     return np.array(parts) if parts else box[None, :].copy()
 
 
-def _distinct(pred: FloatArray, same: float = 0.5) -> FloatArray:
-    """Predicted boxes without duplicates: of two boxes that share ``same`` of the smaller
-    one's area (two tracks on one object, or on a part and the whole), the larger is kept."""
-    if len(pred) < 2:
-        return pred
-    area = pred[:, 2:].prod(axis=1)
-    share = _overlap(pred, pred) / np.minimum(area[:, None], area[None, :])
-    np.fill_diagonal(share, 0.0)
-    smaller = area[:, None] < area[None, :]
-    order = np.arange(len(pred))
-    smaller |= (area[:, None] == area[None, :]) & (order[:, None] > order[None, :])
-    return pred[~((share >= same) & smaller).any(axis=1)]
+#: two predicted boxes sharing this much of the smaller one's area are one (:func:`distinct_boxes`)
+SAME = 0.5
+
+
+@kernel
+def distinct_boxes(pred: FloatArray, same: float) -> FloatArray:
+    """Predicted boxes (tlwh, C-contiguous) without duplicates: of two boxes that share
+    ``same`` of the smaller one's area (two tracks on one object, or on a part and the whole),
+    the larger is kept, and of two of equal area the earlier."""
+    m = pred.shape[0]
+    if m < 2:
+        return pred.copy()
+    area = pred[:, 2] * pred[:, 3]
+    inter = np.empty((m, m))
+    overlap_areas(pred, pred, inter)
+    drop = np.zeros(m, np.bool_)
+    for a in range(m):
+        for b in range(m):
+            if a == b:
+                continue
+            smaller = area[a] < area[b] or (area[a] == area[b] and a > b)
+            if smaller and inter[a, b] / min(area[a], area[b]) >= same:
+                drop[a] = True
+                break
+    out = np.empty((m - drop.sum(), 4))
+    i = 0
+    for a in range(m):
+        if not drop[a]:
+            out[i] = pred[a]
+            i += 1
+    return out
 
 
 def usable_predictions(
@@ -299,7 +318,7 @@ def usable_predictions(
 ) -> FloatArray:
     """The predicted boxes the split uses: finite, of positive size, not a track that follows
     a blob of two (``max(wide, 1.8)`` times as wide as the prior's object, when it is ready)
-    and without duplicates (:func:`_distinct`)."""
+    and without duplicates (:func:`distinct_boxes`)."""
     pred = (
         np.zeros((0, 4))
         if predicted_boxes is None
@@ -309,7 +328,7 @@ def usable_predictions(
     if size_prior is not None and size_prior.ready and len(pred):
         # a track that follows a blob of two people predicts a box of two: not one object
         pred = pred[size_prior.ratio(pred)[:, 0] < max(wide, 1.8)]
-    return _distinct(pred)
+    return distinct_boxes(np.ascontiguousarray(pred), SAME)
 
 
 def blob_claims(
