@@ -535,7 +535,7 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
 
 def test_could_stand_by_hand() -> None:
     """``|v_a| Δk ≤ s_a / 2`` on both axes, by hand; NaN velocity passes."""
-    from mvtrack.video.rescue import could_stand
+    from mvtrack.video.stopped import could_stand
 
     v = np.array([[9.0, 0.0], [11.0, 0.0], [0.0, 6.0], [4.0, 1.0], [np.nan, np.nan]])
     frames = np.array([2, 1, 1, 3, 5])

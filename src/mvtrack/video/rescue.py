@@ -85,32 +85,6 @@ def held_scores(
     return HeldScores(ids[ok], np.minimum(scores[order][pos][ok], 1.0))
 
 
-def could_stand(velocity: FloatArray, frames: Any, size: FloatArray) -> NDArray[np.bool_]:
-    r"""Whether each vehicle can be standing where it was last measured.
-
-    Its filter's velocity ``v`` (px/frame) over the ``Δk`` frames since that measurement would
-    carry it ``v Δk``; it still covers that place if, on each axis,
-
-    .. math:: |v_a| \, Δk \le s_a / 2
-
-    (its last measured centre still inside its box of size ``s``). A vehicle that slowed down
-    and stopped passes (``v`` came to rest with it); one missed while it drives on does not,
-    and the template match at its last place is the road it left. No new constant: the
-    vehicle's own size and speed decide.
-
-    Parameters
-    ----------
-    velocity : (K, 2)
-        The tracks' velocities, px/frame (NaN: no evidence, it passes).
-    frames : (K,) int
-        Frames since each track's last measurement (at least 1 when it missed this one).
-    size : (K, 2)
-        The vehicles' box sizes ``(w, h)``, px.
-    """
-    travel = np.abs(np.asarray(velocity, np.float64)) * np.asarray(frames, np.float64)[:, None]
-    return ~(travel > np.asarray(size, np.float64) / 2).any(axis=1)  # NaN compares False
-
-
 def standing_uids(tracker: Any, tracks: TrackFrame) -> IntArray:
     """The internal uids (sorted) of the rows of ``tracks`` whose track stands: the filter's
     speed is below the box's shorter side per second (``speed · fps < min(w, h)``, the
@@ -183,8 +157,9 @@ class StoppedVehicleRescuer:
     So the search is centred on the track's last measured position, a match is accepted only
     if it lies within ``max_shift`` px of it (a stopped vehicle stands where it was last seen),
     the track's velocity since then would not have carried its box off that place
-    (:func:`could_stand`), and no detection of this frame covers the match (a detected object
-    has not faded). All checks are array operations over the missed tracks.
+    (:func:`~mvtrack.video.stopped.could_stand`), and no detection of this frame covers the
+    match (a detected object has not faded). All checks are compiled passes over the missed
+    tracks (:mod:`mvtrack.video.stopped`).
 
     Parameters
     ----------
@@ -326,7 +301,7 @@ class StoppedVehicleRescuer:
         - the track stands: the filter's speed was below its box's shorter side per second
           in the last frame (:func:`standing_uids`, the ``motion`` of ``states.csv``),
         - the track was last measured within reach of its template's box (its last
-          full-size detection; as :meth:`_centres`),
+          full-size detection; as :func:`~mvtrack.video.stopped.missed_places`),
         - the detection lies inside that box widened by ``max_shift`` px on every side,
         - and the template matches (NCC ≥ the bank's ``min_score``, over the template's own
           object pixels) within ``max_shift`` px of that box's centre: the vehicle still

@@ -8,10 +8,10 @@ one call here, with the same arithmetic:
 - :func:`standing_pieces`: the standing tracks with a detection inside their template's box
   (:meth:`~mvtrack.video.rescue.StoppedVehicleRescuer.fragments`);
 - :func:`missed_places`: each missed track's row, template box and search centre
-  (:meth:`~mvtrack.video.rescue.StoppedVehicleRescuer._centres`);
+  (the place where its vehicle was last seen);
 - :func:`cached_matches`: the matches a frame's first search already found;
 - :func:`accept_stopped`: what a stopped vehicle looks like
-  (:func:`~mvtrack.video.rescue.could_stand`, no detection of its size covering it).
+  (:func:`could_stand`, no detection of its size covering it).
 
 The track table is passed whole (``ints``, ``floats``, C-contiguous; columns of
 :mod:`mvtrack.tracking.lifecycle`), the template bank as its sorted uids and rows
@@ -141,6 +141,38 @@ def cached_matches(cache_uids: IntArray, cache_xy: FloatArray, uids: IntArray,
 
 
 @kernel
+def could_stand(velocity: FloatArray, frames: IntArray, size: FloatArray) -> BoolArray:
+    r"""Whether each vehicle can be standing where it was last measured.
+
+    Its filter's velocity ``v`` (px/frame) over the ``Δk`` frames since that measurement would
+    carry it ``v Δk``; it still covers that place if, on each axis,
+
+    .. math:: |v_a| \, Δk \le s_a / 2
+
+    (its last measured centre still inside its box of size ``s``). A vehicle that slowed down
+    and stopped passes (``v`` came to rest with it); one missed while it drives on does not,
+    and the template match at its last place is the road it left. No new constant: the
+    vehicle's own size and speed decide.
+
+    Parameters
+    ----------
+    velocity : (K, 2)
+        The tracks' velocities, px/frame (NaN: no evidence, it passes).
+    frames : (K,) int
+        Frames since each track's last measurement (at least 1 when it missed this one).
+    size : (K, 2)
+        The vehicles' box sizes ``(w, h)``, px.
+    """
+    k = velocity.shape[0]
+    out = np.ones(k, np.bool_)
+    for i in range(k):
+        for c in range(2):
+            if abs(velocity[i, c]) * np.float64(frames[i]) > size[i, c] / 2:  # NaN: False
+                out[i] = False
+    return out
+
+
+@kernel
 def accept_stopped(
     found: BoolArray, xy: FloatArray, velocity: FloatArray, frames: IntArray, wh: FloatArray,
     box: FloatArray, stood: BoolArray, det_xy: FloatArray, det_wh: FloatArray, merged: float,
@@ -151,24 +183,20 @@ def accept_stopped(
 
     A track could stand when on each axis ``|v| Δk ≤ s/2`` (NaN velocity: it could), ``s``
     the larger of its box ``wh`` and its template's ``box``
-    (:func:`~mvtrack.video.rescue.could_stand`). A detection covers the match when the match
+    (:func:`could_stand`). A detection covers the match when the match
     lies inside it; it does not count when it is over ``merged`` times the track's area
     (vehicles merged into one blob), nor, for a track that ``stood`` (held by its template in
     the last frame), when it reaches out of the template's box widened by ``max_shift``.
     """
     k = found.size
-    left = False
+    size = wh.copy()
     for i in range(k):
-        if not found[i]:
-            continue
         for c in range(2):
-            size = wh[i, c]
             t = box[i, 2 + c]
-            if np.isfinite(t) and not t <= size:  # NumPy's maximum (NaN size stays)
-                size = t if size == size else size
-            if abs(velocity[i, c]) * np.float64(frames[i]) > size / 2:
-                found[i] = False
-        left |= found[i]
+            if np.isfinite(t) and not t <= size[i, c]:  # NumPy's maximum (NaN size stays)
+                size[i, c] = t if size[i, c] == size[i, c] else size[i, c]
+    found &= could_stand(velocity, frames, size)
+    left = found.any()
     if not left:
         return
     for i in range(k):
