@@ -40,6 +40,12 @@ from numpy.typing import NDArray
 from mvtrack.detection.adaptive import temporal_median
 from mvtrack.detection.background import box_cover
 from mvtrack.detection.colourbg import ColourBackground
+from mvtrack.detection.frameloop import (  # noqa: F401 (BOOTSTRAPS: public here too)
+    BOOTSTRAPS,
+    check_bootstrap,
+    input_size_mask,
+    read_ahead,
+)
 from mvtrack.detection.kinds import KindModel
 from mvtrack.detection.labelling import label_blobs
 from mvtrack.detection.splitmerge import (
@@ -57,9 +63,6 @@ from mvtrack.types import Detections, TrackFrame, TrackState, take_rows
 
 Image = NDArray[np.uint8]
 FloatArray = NDArray[np.float64]
-
-#: how :class:`RoadUserDetector` starts its background
-BOOTSTRAPS = ("start", "none")
 
 #: a box with less than this share of the area of the commonest kind where it stands may be
 #: a fragment of an object (a car broken at its windscreen), and is offered for joining
@@ -159,9 +162,7 @@ class RoadUserDetector:
         shadows: bool = True,
         ghost_every: int = 10,
     ) -> None:
-        if bootstrap not in BOOTSTRAPS:
-            raise ValueError(f"bootstrap must be one of {', '.join(BOOTSTRAPS)}, "
-                             f"got {bootstrap!r}")
+        check_bootstrap(bootstrap)
         if isinstance(bootstrap_frames, bool) or int(bootstrap_frames) < 1:
             raise ValueError(f"bootstrap_frames must be at least 1, got {bootstrap_frames}")
         if not (math.isfinite(scale) and 0.05 <= scale <= 1.0):
@@ -232,50 +233,20 @@ class RoadUserDetector:
     @property
     def mask(self) -> Image | None:
         """The cleaned foreground of the last frame (0/255) at the input frame's size."""
-        m = self._mask
-        if m is None or self._shape is None:
-            return None
-        h, w = self._shape
-        if m.shape == (h, w):
-            return m
-        return cv2.resize(m, (w, h), interpolation=cv2.INTER_NEAREST)
+        return input_size_mask(self._mask, self._shape)
 
     # ------------------------------------------------------------------ the loop's hooks
     def prepare(self, frames: Iterable[Image]) -> Iterator[Image]:
-        """``frames`` again, the background bootstrapped from the first of them on the way.
+        """``frames`` again, every one of them; with ``bootstrap="start"`` the first
+        ``bootstrap_frames`` are read ahead (:func:`~mvtrack.detection.frameloop.read_ahead`:
+        lazily, a read error after the frames read) and the background starts from the
+        temporal median of up to :data:`BOOTSTRAP_MEDIAN` of them, evenly spaced."""
+        count = 0 if self.bootstrap == "none" else self.bootstrap_frames
+        yield from read_ahead(frames, count, self._bootstrap)
 
-        Lazy: nothing is read before the first frame is asked for. A source that fails during
-        the read-ahead gives the frames read before it, then its error.
-        """
-        it = iter(frames)
-        try:
-            if self.bootstrap == "none":
-                yield from it
-                return
-            head: list[Image] = []
-            error: BaseException | None = None
-            try:
-                for _ in range(self.bootstrap_frames):
-                    head.append(next(it))
-            except StopIteration:
-                pass
-            except (ValueError, OSError) as exc:
-                if not head:
-                    raise
-                error = exc
-            if head:
-                self.background.bootstrap(
-                    temporal_median((self.reduce(f) for f in head),
-                                    max_frames=BOOTSTRAP_MEDIAN))
-            yield from head
-            del head
-            if error is not None:
-                raise error
-            yield from it
-        finally:
-            close = getattr(it, "close", None)
-            if close is not None:
-                close()
+    def _bootstrap(self, head: list[Image]) -> None:
+        self.background.bootstrap(
+            temporal_median((self.reduce(f) for f in head), max_frames=BOOTSTRAP_MEDIAN))
 
     def observe(self, dets: Detections, tracks: TrackFrame) -> None:
         """After each tracker step: keep the boxes predicted for the next frame of the

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -20,6 +19,12 @@ from mvtrack.detection.feedback import (
     isolated,
     predicted_boxes,
     two_pass,
+)
+from mvtrack.detection.frameloop import (
+    BOOTSTRAPS,
+    check_bootstrap,
+    input_size_mask,
+    read_ahead,
 )
 from mvtrack.detection.scene_frontend import SceneFrontEnd, complete_bodies
 from mvtrack.types import Detections, TrackFrame
@@ -37,10 +42,6 @@ __all__ = [
 ]
 
 Image = NDArray[np.uint8]
-
-
-#: how :class:`SceneDetector` starts its background
-BOOTSTRAPS = ("start", "none")
 
 
 class SceneDetector:
@@ -90,8 +91,7 @@ class SceneDetector:
         complete: float | None = 0.85,
         verify: float | None = None,
     ) -> None:
-        if bootstrap not in BOOTSTRAPS:
-            raise ValueError(f"bootstrap must be one of {', '.join(BOOTSTRAPS)}, got {bootstrap!r}")
+        check_bootstrap(bootstrap)
         if int(bootstrap_frames) < 1:
             raise ValueError(f"bootstrap_frames must be at least 1, got {bootstrap_frames}")
         self.frontend = SceneFrontEnd(
@@ -111,47 +111,17 @@ class SceneDetector:
     @property
     def mask(self) -> Image | None:
         """The cleaned foreground mask of the last frame at the input frame's size."""
-        m = self.frontend.mask
-        if m is None or self._shape is None:
-            return None
-        h, w = self._shape
-        if m.shape == (h, w):
-            return m
-        return cv2.resize(m, (w, h), interpolation=cv2.INTER_NEAREST)
+        return input_size_mask(self.frontend.mask, self._shape)
 
     def prepare(self, frames: Iterable[Image]) -> Iterator[Image]:
-        """``frames`` again, the background bootstrapped from the first of them on the way.
+        """``frames`` again, every one of them, the front end's background started on the way
+        from the frames read ahead (the class docstring;
+        :func:`~mvtrack.detection.frameloop.read_ahead`)."""
+        count = 0 if self.bootstrap == "none" else self.bootstrap_frames
+        yield from read_ahead(frames, count, self._bootstrap)
 
-        Lazy: nothing is read before the first frame is asked for. A source that fails during
-        the read-ahead gives the frames read before it, then its error.
-        """
-        it = iter(frames)
-        try:
-            if self.bootstrap == "none":
-                yield from it
-                return
-            head: list[Image] = []
-            error: BaseException | None = None
-            try:
-                for _ in range(self.bootstrap_frames):
-                    head.append(next(it))
-            except StopIteration:
-                pass
-            except (ValueError, OSError) as exc:
-                if not head:
-                    raise
-                error = exc
-            if head:
-                self.frontend.bootstrap(head, max_frames=self.bootstrap_frames)
-            yield from head
-            del head
-            if error is not None:
-                raise error
-            yield from it
-        finally:
-            close = getattr(it, "close", None)
-            if close is not None:
-                close()
+    def _bootstrap(self, head: list[Image]) -> None:
+        self.frontend.bootstrap(head, max_frames=self.bootstrap_frames)
 
     def __call__(self, frame: Image, index: int | None = None) -> Detections:
         """Detections of ``frame`` (``index``: its frame number, default the count so far)."""
