@@ -129,6 +129,33 @@ def _sorted_median(frames: list[Image]) -> Image:
     return (half + (odd & half & 1)).astype(np.uint8)  # x.5 rounded to the even neighbour
 
 
+def check_gaussian(alpha: float, alpha_slow: float, k_sigma: float, min_diff: float,
+                   init_sigma: float, min_sigma: float) -> None:
+    """Raise ``ValueError`` unless the parameters of a per-pixel Gaussian background
+    (:class:`GaussianBackground`, :class:`~mvtrack.detection.colourbg.ColourBackground`) are
+    valid: learning rates in ``[0, 1]`` with ``alpha_slow <= alpha``, a positive
+    ``k_sigma``, ``min_diff`` in ``[0, 255)`` grey levels, ``0 < min_sigma <= init_sigma``."""
+    for name, value in (("alpha", alpha), ("alpha_slow", alpha_slow)):
+        if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+            raise ValueError(f"{name} must be in [0, 1], got {value}")
+    if not alpha_slow <= alpha:
+        raise ValueError(f"alpha_slow ({alpha_slow}) must not exceed alpha ({alpha})")
+    if not (math.isfinite(k_sigma) and k_sigma > 0):
+        raise ValueError(f"k_sigma must be a positive number, got {k_sigma}")
+    if not (math.isfinite(min_diff) and 0 <= min_diff < 255):
+        raise ValueError(f"min_diff must be in [0, 255) grey levels, got {min_diff}")
+    if not (0 < min_sigma <= init_sigma):
+        raise ValueError(f"need 0 < min_sigma <= init_sigma, got {min_sigma} and {init_sigma}")
+
+
+def check_shadow_ratio(shadow_ratio: tuple[float, float]) -> tuple[float, float]:
+    """``shadow_ratio`` as two floats ``(lo, hi)``; ``ValueError`` unless ``0 < lo < hi``."""
+    lo, hi = shadow_ratio
+    if not (0 < lo < hi):
+        raise ValueError(f"shadow_ratio must be 0 < lo < hi, got {shadow_ratio}")
+    return float(lo), float(hi)
+
+
 class GaussianBackground:
     """Per-pixel mean and variance with a threshold in standard deviations (module docstring).
 
@@ -202,26 +229,12 @@ class GaussianBackground:
         shadow_texture: float = 0.8,
         ghost_every: int = 10,
     ) -> None:
-        for name, value in (("alpha", alpha), ("alpha_slow", alpha_slow)):
-            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
-                raise ValueError(f"{name} must be in [0, 1], got {value}")
-        if not alpha_slow <= alpha:
-            raise ValueError(f"alpha_slow ({alpha_slow}) must not exceed alpha ({alpha})")
-        if not (math.isfinite(k_sigma) and k_sigma > 0):
-            raise ValueError(f"k_sigma must be a positive number, got {k_sigma}")
-        if not (math.isfinite(min_diff) and 0 <= min_diff < 255):
-            raise ValueError(f"min_diff must be in [0, 255) grey levels, got {min_diff}")
-        if not (0 < min_sigma <= init_sigma):
-            raise ValueError(
-                f"need 0 < min_sigma <= init_sigma, got {min_sigma} and {init_sigma}"
-            )
+        check_gaussian(alpha, alpha_slow, k_sigma, min_diff, init_sigma, min_sigma)
         if absorb_after < 0:
             raise ValueError(f"absorb_after must be >= 0 frames, got {absorb_after}")
         if jitter < 0 or ghost_every < 0:
             raise ValueError(f"jitter and ghost_every must be >= 0, got {jitter}, {ghost_every}")
-        lo, hi = shadow_ratio
-        if not (0 < lo < hi):
-            raise ValueError(f"shadow_ratio must be 0 < lo < hi, got {shadow_ratio}")
+        lo, hi = check_shadow_ratio(shadow_ratio)
         self.alpha = float(alpha)
         self.alpha_slow = float(alpha_slow)
         self.absorb_after = int(absorb_after)
@@ -233,7 +246,7 @@ class GaussianBackground:
         self.min_sigma = float(min_sigma)
         self.jitter = int(jitter)
         self.shadows = bool(shadows)
-        self.shadow_ratio = (float(lo), float(hi))
+        self.shadow_ratio = (lo, hi)
         self.shadow_chroma = float(shadow_chroma)
         self.shadow_texture = float(shadow_texture)
         self.ghost_every = int(ghost_every)

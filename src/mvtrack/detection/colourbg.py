@@ -65,6 +65,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from mvtrack.detection.adaptive import check_gaussian, check_shadow_ratio
 from mvtrack.jit import kernel
 
 Image = NDArray[np.uint8]
@@ -160,26 +161,14 @@ class ColourBackground:
         ghost_every: int = 10,
         refresh: int = 8,
     ) -> None:
-        for name, value in (("alpha", alpha), ("alpha_slow", alpha_slow)):
-            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
-                raise ValueError(f"{name} must be in [0, 1], got {value}")
-        if not alpha_slow <= alpha:
-            raise ValueError(f"alpha_slow ({alpha_slow}) must not exceed alpha ({alpha})")
-        if not (math.isfinite(k_sigma) and k_sigma > 0):
-            raise ValueError(f"k_sigma must be a positive number, got {k_sigma}")
-        if not (math.isfinite(min_diff) and 0 <= min_diff < 255):
-            raise ValueError(f"min_diff must be in [0, 255) grey levels, got {min_diff}")
-        if not (0 < min_sigma <= init_sigma):
-            raise ValueError(f"need 0 < min_sigma <= init_sigma, got {min_sigma}, {init_sigma}")
+        check_gaussian(alpha, alpha_slow, k_sigma, min_diff, init_sigma, min_sigma)
         for name, value in (("absorb_after", absorb_after), ("jitter", jitter),
                             ("ghost_every", ghost_every)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 0:
                 raise ValueError(f"{name} must be a whole number >= 0, got {value!r}")
         if isinstance(refresh, bool) or not isinstance(refresh, int) or refresh < 1:
             raise ValueError(f"refresh must be a whole number >= 1, got {refresh!r}")
-        lo, hi = shadow_ratio
-        if not (0 < lo < hi):
-            raise ValueError(f"shadow_ratio must be 0 < lo < hi, got {shadow_ratio}")
+        lo, hi = check_shadow_ratio(shadow_ratio)
         self.alpha = float(alpha)
         self.alpha_slow = float(alpha_slow)
         self.absorb_after = min(int(absorb_after), 65534)
@@ -189,7 +178,7 @@ class ColourBackground:
         self.min_sigma = float(min_sigma)
         self.jitter = int(jitter)
         self.shadows = bool(shadows)
-        self.shadow_ratio = (float(lo), float(hi))
+        self.shadow_ratio = (lo, hi)
         self.shadow_chroma = float(shadow_chroma)
         self.shadow_texture = float(shadow_texture)
         self.shadow_correlation = float(shadow_correlation)
