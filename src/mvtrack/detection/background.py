@@ -420,14 +420,8 @@ class KNN(_Subtractor):
     dist2_threshold : float, default 400
         Squared distance to a sample under which a pixel counts as close to it (OpenCV's
         default).
-    detect_shadows : bool, default True
-        Mark and discard shadows.
-    learning_rate : float, default -1
-        OpenCV's learning rate; negative chooses it from ``history``.
-    use_color : bool, default True
-        Model the BGR frame (True) or its luminance (False).
-    warmup, **blob
-        As in :class:`DisturbanceMap`.
+    detect_shadows, learning_rate, use_color, warmup, **blob
+        As in :class:`MOG2` (the same defaults).
     """
 
     name = "knn"
