@@ -81,12 +81,7 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
     reach and tests each track against the cells its reach covers.
     """
     n, m = cx.shape[0], dxy.shape[0]
-    tr = np.flatnonzero(tsel)
-    dr = np.flatnonzero(dsel)
-    cap = 16 + 4 * (tr.size + dr.size)
-    ti = np.empty(cap, np.intp)
-    dj = np.empty(cap, np.intp)
-    cost = np.empty(cap, np.float64)
+    tr, dr, ti, dj, cost = _selected(tsel, dsel)
     k = 0
     if tr.size == 0 or dr.size == 0 or n == 0 or m == 0:
         return ti[:0], dj[:0], cost[:0]
@@ -98,9 +93,8 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                     continue
                 c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    if k == cap:
-                        cap *= 2
-                        ti, dj, cost = _grow(ti, dj, cost, cap)
+                    if k == ti.size:
+                        ti, dj, cost = _grow(ti, dj, cost)
                     ti[k], dj[k], cost[k] = i, j, c
                     k += 1
         return ti[:k], dj[:k], cost[:k]
@@ -148,9 +142,8 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
                     continue
                 c = _pair_cost(i, j, cx, S, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    if k == cap:
-                        cap *= 2
-                        ti, dj, cost = _grow(ti, dj, cost, cap)
+                    if k == ti.size:
+                        ti, dj, cost = _grow(ti, dj, cost)
                     ti[k], dj[k], cost[k] = i, j, c
                     # keep this track's pairs in detection order (insertion, a few at most)
                     e = k
@@ -163,10 +156,22 @@ def quadratic_pairs(cx: FloatArray, S: FloatArray, twh: FloatArray, tsel: NDArra
 
 
 @kernel
-def _grow(ti: IntArray, dj: IntArray, cost: FloatArray, cap: int
+def _selected(tsel: NDArray[np.bool_], dsel: NDArray[np.bool_]
+              ) -> tuple[IntArray, IntArray, IntArray, IntArray, FloatArray]:
+    """The selected tracks and detections, and empty track, detection and value arrays for
+    their pairs: room for a few pairs a row, more made by :func:`_grow`."""
+    tr = np.flatnonzero(tsel)
+    dr = np.flatnonzero(dsel)
+    cap = 16 + 4 * (tr.size + dr.size)
+    return tr, dr, np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap, np.float64)
+
+
+@kernel
+def _grow(ti: IntArray, dj: IntArray, cost: FloatArray
           ) -> tuple[IntArray, IntArray, FloatArray]:
-    t2, d2, c2 = np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap, np.float64)
+    """Copies of the full pair arrays twice as long."""
     k = ti.size
+    t2, d2, c2 = np.empty(2 * k, np.intp), np.empty(2 * k, np.intp), np.empty(2 * k, np.float64)
     t2[:k], d2[:k], c2[:k] = ti, dj, cost
     return t2, d2, c2
 
@@ -238,12 +243,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
     pair may pass), is tested pair by pair.
     """
     n, m = cx.shape[0], dxy.shape[0]
-    tr = np.flatnonzero(tsel)
-    dr = np.flatnonzero(dsel)
-    cap = 16 + 4 * (tr.size + dr.size)
-    ti = np.empty(cap, np.intp)
-    dj = np.empty(cap, np.intp)
-    cost = np.empty(cap, np.float64)
+    tr, dr, ti, dj, cost = _selected(tsel, dsel)
     k = 0
     if tr.size == 0 or dr.size == 0 or n == 0 or m == 0:
         return ti[:0], dj[:0], cost[:0]
@@ -252,9 +252,8 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
             for j in dr:
                 c = _overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
                 if c <= gate:
-                    if k == cap:
-                        cap *= 2
-                        ti, dj, cost = _grow(ti, dj, cost, cap)
+                    if k == ti.size:
+                        ti, dj, cost = _grow(ti, dj, cost)
                     ti[k], dj[k], cost[k] = i, j, c
                     k += 1
         return ti[:k], dj[:k], cost[:k]
@@ -338,9 +337,8 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
             j = cand[e]
             c = _overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
             if c <= gate:
-                if k == cap:
-                    cap *= 2
-                    ti, dj, cost = _grow(ti, dj, cost, cap)
+                if k == ti.size:
+                    ti, dj, cost = _grow(ti, dj, cost)
                 ti[k], dj[k], cost[k] = i, j, c
                 k += 1
     return ti[:k], dj[:k], cost[:k]
