@@ -82,6 +82,12 @@ class TrackBoxes:
         """(T,) int64: the tracks that have a recorded detection (sorted)."""
         return self._u[:-1]
 
+    def rows(self) -> tuple[IntArray, FloatArray]:
+        """The sorted uids with their sentinel last, and one row per uid (the box of
+        :meth:`boxes` in columns 0–3): the bank as the compiled steps of
+        :mod:`mvtrack.video.stopped` read it. Not copies; do not modify."""
+        return self._u, self._f
+
     def __len__(self) -> int:
         return int(self._u.size - 1)
 

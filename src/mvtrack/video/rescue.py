@@ -267,9 +267,8 @@ class StoppedVehicleRescuer:
         bank = getattr(self.inner, "bank", None)
         if bank is None or not hasattr(bank, "boxes"):
             return _EMPTY_BANK
-        u, f = getattr(bank, "_u", None), getattr(bank, "_f", None)
-        if u is not None and f is not None:
-            return u, f
+        if hasattr(bank, "rows"):
+            return bank.rows()
         uids = np.unique(np.asarray(tab.uid, np.int64))
         boxes = np.asarray(bank.boxes(uids), np.float64).reshape(-1, 4)
         return np.append(uids, _EMPTY_BANK[0]), np.vstack([boxes, _EMPTY_BANK[1][:, :4]])
@@ -346,26 +345,18 @@ class StoppedVehicleRescuer:
         found = np.zeros(uids.size, bool)
         xy = np.full((uids.size, 2), np.nan)
         score = np.full(uids.size, np.nan)
-        rest = None
         if image is not None and cache is not None and cache[0] is image and cache[1].size:
             hit = cached_matches(cache[1], cache[2], uids, np.ascontiguousarray(centre),
                                  self.max_shift)
             found = hit >= 0
-            if found.any():
-                xy[found], score[found] = cache[2][hit[found]], cache[3][hit[found]]
-                rest = ~found
-        if rest is None:  # nothing taken from the cache: search them all
-            f_sub, xy_sub, s_sub = search(uids, centre, wh)
-            xy[:], score[:] = xy_sub, s_sub
-            d = xy - centre  # the match must sit where the vehicle was last seen
-            found = np.asarray(f_sub, bool) & (np.hypot(d[:, 0], d[:, 1]) <= self.max_shift)
-        elif rest.any():
+            xy[found], score[found] = cache[2][hit[found]], cache[3][hit[found]]
+        rest = np.flatnonzero(~found)
+        if rest.size:
             f_sub, xy_sub, s_sub = search(uids[rest], centre[rest],
                                           np.asarray(wh, np.float64).reshape(-1, 2)[rest])
             xy[rest], score[rest] = xy_sub, s_sub
-            d = xy[rest] - centre[rest]
-            found[rest] = np.asarray(f_sub, bool) & (
-                np.hypot(d[:, 0], d[:, 1]) <= self.max_shift)
+            d = xy[rest] - centre[rest]  # the match must sit where the vehicle was last seen
+            found[rest] = np.asarray(f_sub, bool) & (np.hypot(d[:, 0], d[:, 1]) <= self.max_shift)
         return found, xy, score
 
     def observe(self, image: Image, dets: Detections, tracks: TrackFrame) -> None:
