@@ -224,8 +224,30 @@ def test_snapshot_saves_one_annotated_frame(tmp_path, capsys) -> None:
     assert xs.min() <= 56 and xs.max() >= 61 and ys.min() <= 31 and ys.max() >= 32
     # (the filtered box may lag the blob by a few px right after the detector's streak ends)
     assert abs(xs.mean() - 58.5) < 8 and abs(ys.mean() - 31.5) < 6
-    assert json.loads((out / "summary.json").read_text())["files"]["snapshot"] == "frame00030.png"
+    files = json.loads((out / "summary.json").read_text())["files"]
+    assert files["snapshot 30"] == "frame00030.png"
     assert main(["track", str(video), "--out", str(tmp_path / "o2"), "--snapshot", "-1"]) == 2
+
+
+def test_snapshot_given_twice_saves_both_frames(tmp_path) -> None:
+    """``--snapshot`` repeated saves each frame (in any order, a repeat once), and each is
+    the frame of its index: the box moves 2 px a frame, so the two pictures differ by it."""
+    video = _write_avi(tmp_path / "v.avi")
+    out = tmp_path / "out"
+    assert main(["track", str(video), "--out", str(out), "--no-video", "--snapshot", "34",
+                 "--snapshot", "20", "--snapshot", "34"]) == 0
+    assert sorted(p.name for p in out.glob("frame*.png")) == ["frame00020.png",
+                                                              "frame00034.png"]
+    files = json.loads((out / "summary.json").read_text())["files"]
+    assert files["snapshot 20"] == "frame00020.png" and files["snapshot 34"] == "frame00034.png"
+    # the bright blob (the raw frame's box, 230 grey) moves right by 2 px per frame: 28 px
+    xs = [np.nonzero((cv2.imread(str(out / f"frame{k:05d}.png")) > 200).all(axis=2)
+                     [30])[0] for k in (20, 34)]
+    assert xs[0].size and xs[1].size
+    assert 20 <= xs[1].min() - xs[0].min() <= 36
+    assert main(["track", str(video), "--out", str(tmp_path / "o3"), "--snapshot", "5",
+                 "--snapshot", "40"]) == 2  # past the 40 frames of the video, before any file
+    assert not (tmp_path / "o3" / "results.txt").exists()
 
 
 def test_preset_arguments_go_to_the_preset(tmp_path) -> None:

@@ -73,8 +73,15 @@ def test_a_snapshot_never_reached_on_a_source_of_unknown_length_is_said(
     assert main(["track", str(video), "--out", str(out), "--snapshot", "40",
                  "--no-video"]) == 2
     err = _err(capsys)
-    assert f"--snapshot 40: {video} ended after 30 frames (0 to 29), so no frame was saved" in err
+    assert (f"--snapshot 40: {video} ended after 30 frames (0 to 29), so that frame was not "
+            "saved") in err
     assert (out / "results.txt").exists() and not list(out.glob("frame*.png"))
+    # of two frames asked for, the one inside the video is saved and the other named
+    out2 = tmp_path / "out2"
+    assert main(["track", str(video), "--out", str(out2), "--snapshot", "40", "--snapshot",
+                 "12", "--no-video"]) == 2
+    assert f"--snapshot 40: {video} ended after 30 frames" in _err(capsys)
+    assert sorted(p.name for p in out2.glob("frame*.png")) == ["frame00012.png"]
 
 
 def test_swapped_ground_truth_and_results_get_a_warning(tmp_path: Path, capsys) -> None:

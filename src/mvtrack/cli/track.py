@@ -72,8 +72,9 @@ def register(app: typer.Typer) -> None:
                          "in --config; this option wins)."),
         ] = None,
         snapshot: Annotated[
-            int | None,
-            typer.Option(help="Also save the annotated frame N (0-based) as frameNNNNN.png."),
+            list[int] | None,
+            typer.Option(help="Also save the annotated frame N (0-based) as frameNNNNN.png; "
+                         "give it again for more frames."),
         ] = None,
         flush: Annotated[
             float | None,
@@ -114,14 +115,15 @@ def register(app: typer.Typer) -> None:
         from mvtrack.errors import InputError
         from mvtrack.io.outdir import run_folder
         from mvtrack.video import track_video
-        from mvtrack.video.run import write_tables
+        from mvtrack.video.run import snapshot_frames, write_tables
 
         if max_frames is not None and max_frames < 1:
             raise InputError(f"--max-frames must be at least 1, got {max_frames}")
-        if snapshot is not None and snapshot < 0:
-            raise InputError(f"--snapshot must be a frame index >= 0, got {snapshot}")
-        if snapshot is not None and max_frames is not None and snapshot >= max_frames:
-            raise InputError(f"--snapshot {snapshot} is past the last frame tracked "
+        shots = snapshot_frames(snapshot)
+        if shots and shots[0] < 0:
+            raise InputError(f"--snapshot must be a frame index >= 0, got {shots[0]}")
+        if shots and max_frames is not None and shots[-1] >= max_frames:
+            raise InputError(f"--snapshot {shots[-1]} is past the last frame tracked "
                              f"(--max-frames {max_frames}: frames 0 to {max_frames - 1})")
         if flush is not None and not (math.isfinite(flush) and flush > 0):
             raise InputError(f"--flush must be a number of seconds > 0, got {flush:g}")
@@ -134,7 +136,7 @@ def register(app: typer.Typer) -> None:
             settings = dataclasses.replace(settings, offline=True)
         with run_folder(out, force=force, inputs=[video], kind="track"):
             run = track_video(video, out, settings, fps=settings.frame_rate,
-                              max_frames=max_frames, snapshot=snapshot, flush=flush,
+                              max_frames=max_frames, snapshot=shots, flush=flush,
                               masks=masks)
             tables = write_tables(run, out, settings, fps=fps)
         res, summary = run.result, run.summary
@@ -154,7 +156,8 @@ def register(app: typer.Typer) -> None:
             raise typer.Exit(_signals.interrupt_status())
         if res.error is not None:
             raise InputError(f"{res.error}; results so far are in {out}")
-        if snapshot is not None and "snapshot" not in run.paths:
-            raise InputError(f"--snapshot {snapshot}: {video} ended after {res.n_frames} frames "
-                             f"(0 to {res.n_frames - 1}), so no frame was saved; the tracks "
+        missed = [k for k in shots if f"snapshot {k}" not in run.paths]
+        if missed:
+            raise InputError(f"--snapshot {missed[0]}: {video} ended after {res.n_frames} frames "
+                             f"(0 to {res.n_frames - 1}), so that frame was not saved; the tracks "
                              f"are in {out}")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import os
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -40,6 +40,14 @@ class RunOutput:
     paths: dict[str, Path]
 
 
+def snapshot_frames(snapshot: int | Sequence[int] | None) -> tuple[int, ...]:
+    """The frame indices to save as pictures, sorted and once each (``--snapshot``, which
+    may be given more than once); none for None."""
+    if snapshot is None:
+        return ()
+    return tuple(sorted({int(snapshot)} if isinstance(snapshot, int) else set(snapshot)))
+
+
 def _track_lengths(log: Any) -> NDArray[np.int64]:
     ids = log.columns()["track_id"]
     ids = ids[ids > 0]
@@ -59,7 +67,7 @@ def track_to_folder(
     progress: bool | None = None,
     parts: tuple[Any, Any] | None = None,
     source_error: Callable[[], str | None] | None = None,
-    snapshot: int | None = None,
+    snapshot: int | Sequence[int] | None = None,
     flush: float | None = None,
     masks: str | os.PathLike[str] | None = None,
     reread: Callable[[], Iterable[Image]] | None = None,
@@ -128,9 +136,9 @@ def track_to_folder(
     source_error : callable, optional
         Asked after the loop why the source ended early (e.g. ``lambda: src.error`` of a
         :class:`~mvtrack.io.video.FrameSource`); its answer goes to ``result.error``.
-    snapshot : int, optional
-        Also save the annotated frame with this index as ``frameNNNNN.png`` (lossless), with or
-        without the video.
+    snapshot : int or sequence of int, optional
+        Also save the annotated frames with these indices as ``frameNNNNN.png`` (lossless),
+        with or without the video; each is ``paths["snapshot N"]``.
     flush : float, optional
         Stream ``results.txt`` and ``states.csv``, appending every ``flush`` seconds (> 0).
     masks : path, optional
@@ -164,12 +172,13 @@ def track_to_folder(
         detector, tracker = build_detector(settings), build_tracker(settings, fps)
     else:
         detector, tracker = parts
+    shots = snapshot_frames(snapshot)
     offline = None
     if settings.offline:
         if flush is not None:
             raise InputError("--offline revises rows after the last frame: it cannot stream "
                              "(--flush)")
-        if (settings.video or snapshot is not None) and reread is None:
+        if (settings.video or shots) and reread is None:
             raise InputError("--offline draws the video in a second pass over the source, "
                              "which cannot be read twice: add --no-video (and no --snapshot)")
         offline = tracker = OfflineRows(tracker)
@@ -207,7 +216,7 @@ def track_to_folder(
             paths["video"] = dest
         trails = TrailBuffer(settings.trail)
         live = None  # lines, zones, running counts and speeds drawn on the video
-        if settings.analytics is not None and (writer is not None or snapshot is not None):
+        if settings.analytics is not None and (writer is not None or shots):
             from mvtrack.analytics import settings_from_dict
             from mvtrack.viz.overlay import LiveAnalytics
 
@@ -229,8 +238,8 @@ def track_to_folder(
                 draw(k, image, tracks, settings.gates)
 
         def draw(k: int, image: Image, tracks: TrackFrame, with_gates: bool) -> None:
-            shot = snapshot is not None and k == snapshot
-            if writer is None and snapshot is None:
+            shot = k in shots
+            if writer is None and not shots:
                 return
             trails.push(tracks)
             if live is not None:
@@ -253,7 +262,7 @@ def track_to_folder(
                 with atomic_path(dest) as tmp_png:
                     if not cv2.imwrite(str(tmp_png), img, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
                         raise OSError(f"cannot write {dest}")
-                paths["snapshot"] = dest
+                paths[f"snapshot {k}"] = dest
 
         result = run_frames(
             frames, detector, tracker, rescuer=rescuer, max_frames=max_frames,
@@ -266,7 +275,7 @@ def track_to_folder(
             result.error = source_error()
         if offline is not None:
             log = offline.finish(log, relinker.shown if relinker is not None else None)
-            if reread is not None and (writer is not None or snapshot is not None):
+            if reread is not None and (writer is not None or shots):
                 bar = progress_bar(len(log), "drawing", progress)
                 try:  # the second pass: the revised rows drawn on the frames again
                     for k, (image, tracks) in enumerate(zip(reread(), log, strict=False)):
@@ -413,7 +422,7 @@ def track_video(
     fps: float | None = None,
     max_frames: int | None = None,
     progress: bool | None = None,
-    snapshot: int | None = None,
+    snapshot: int | Sequence[int] | None = None,
     flush: float | None = None,
     masks: str | os.PathLike[str] | None = None,
 ) -> RunOutput:
@@ -450,8 +459,9 @@ def track_video(
     with src:
         last = src.frame_count if max_frames is None else min(src.frame_count or max_frames,
                                                                max_frames)
-        if snapshot is not None and last is not None and snapshot >= last:
-            raise InputError(f"--snapshot {snapshot} is past the last frame {last - 1} of "
+        late = [k for k in snapshot_frames(snapshot) if last is not None and k >= last]
+        if late:
+            raise InputError(f"--snapshot {late[0]} is past the last frame {last - 1} of "
                              f"{video}" + ("" if last == src.frame_count else
                                            f" tracked (--max-frames {max_frames})"))
         resolved = resolve_settings(settings, src.size, src.fps)
