@@ -505,7 +505,7 @@ def test_stopped_vehicle_guard_accepts_only_what_a_stopped_vehicle_looks_like() 
 
     inner = FindsAll()
     last = np.array([[20.0, 0.0], [50.0, 1.0], [120.0, 0.0], [170.0, 0.0]])
-    tracker = SimpleNamespace(tracks=SimpleNamespace(uid=np.arange(4), last_xy=last))
+    tracker = SimpleNamespace(tracks=_table(np.zeros(4, int), last))
     guard = StoppedVehicleRescuer(inner, tracker, max_shift=4.0)
     image = np.zeros((10, 10, 3), np.uint8)
     inner.offset[2] = (6.0, 0.0)  # track 2's match lies 6 px from where it was last seen
@@ -590,6 +590,12 @@ class _Bank:
     def boxes(self, uids):
         return self._boxes[np.asarray(uids)]
 
+    def rows(self):  # the bank as the compiled steps read it: uids 0..n-1, a sentinel last
+        n = len(self._boxes)
+        f = np.full((n + 1, 13), np.nan)
+        f[:n, :4] = self._boxes
+        return np.append(np.arange(n), np.iinfo(np.int64).max), f
+
 
 class _Search:
     """A stand-in NCC search that finds every track ``offset`` px from where it is asked."""
@@ -610,6 +616,19 @@ class _Search:
         pass
 
 
+def _table(state, last, track_id=None):
+    """A track table of uids 0..n-1 with their states, last measurements and IDs."""
+    from mvtrack.tracking.lifecycle import LAST_X, LAST_Y, N_FLOAT, N_INT, STATE, TID, UID
+    from mvtrack.tracking.table import TrackTable
+
+    n = len(state)
+    ints, floats = np.zeros((n, N_INT), np.int64), np.zeros((n, N_FLOAT))
+    ints[:, UID], ints[:, STATE] = np.arange(n), state
+    ints[:, TID] = np.arange(n) if track_id is None else track_id
+    floats[:, LAST_X:LAST_Y + 1] = last
+    return TrackTable(ints, floats)
+
+
 def _guard(state, last, boxes, velocity, offset=None, pieces=True):
     from types import SimpleNamespace
 
@@ -620,8 +639,7 @@ def _guard(state, last, boxes, velocity, offset=None, pieces=True):
     if offset is not None:
         inner.offset[:] = offset
     tracker = SimpleNamespace(
-        tracks=SimpleNamespace(uid=np.arange(n), track_id=np.arange(n) + 10,
-                               last_xy=np.array(last, float), state=np.array(state)),
+        tracks=_table(state, last, np.arange(n) + 10),
         row_uids=np.arange(n), config=SimpleNamespace(fps=10.0))
     guard = StoppedVehicleRescuer(inner, tracker, max_shift=4.0, pieces=pieces)
     # the last frame's rows: their velocities (px/frame) and boxes tell which tracks stand

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from mvtrack.analytics.outputs import STOPPED_SIDES_PER_S
 from mvtrack.errors import InputError
-from mvtrack.tracking.lifecycle import LAST_X, LAST_Y, N_FLOAT, N_INT, STATE, TID, UID
+from mvtrack.tracking.lifecycle import STATE
 from mvtrack.types import Detections, TrackFrame, TrackState
 from mvtrack.video.loop import NO_SCORES, HeldScores, RescueFn
 from mvtrack.video.stopped import (
@@ -107,23 +107,10 @@ def _member(a: IntArray, sorted_b: IntArray) -> NDArray[np.bool_]:
     return sorted_b[pos] == a
 
 
-def table_arrays(table: Any) -> tuple[IntArray, FloatArray]:
-    """A track table's integer and float columns (:mod:`mvtrack.tracking.lifecycle`),
-    C-contiguous, for the kernels of :mod:`mvtrack.video.stopped`; a table that is not a
-    :class:`~mvtrack.tracking.table.TrackTable` gives its ``uid``, ``track_id``, ``state``
-    and ``last_xy`` (the others zero)."""
-    ints, floats = getattr(table, "ints", None), getattr(table, "floats", None)
-    if ints is not None and floats is not None:
-        return np.ascontiguousarray(ints, np.int64), np.ascontiguousarray(floats, np.float64)
-    uid = np.asarray(table.uid, np.int64).reshape(-1)
-    ints = np.zeros((uid.size, N_INT), np.int64)
-    ints[:, UID] = uid
-    for col, name in ((TID, "track_id"), (STATE, "state")):
-        if getattr(table, name, None) is not None:
-            ints[:, col] = getattr(table, name)
-    floats = np.zeros((uid.size, N_FLOAT))
-    floats[:, LAST_X:LAST_Y + 1] = table.last_xy
-    return ints, floats
+def _arrays(table: Any) -> tuple[IntArray, FloatArray]:
+    """A :class:`~mvtrack.tracking.table.TrackTable`'s integer and float columns,
+    C-contiguous, for the kernels of :mod:`mvtrack.video.stopped`."""
+    return np.ascontiguousarray(table.ints, np.int64), np.ascontiguousarray(table.floats)
 
 
 def _uids_of_ids(table: Any, ids: IntArray) -> IntArray:
@@ -214,11 +201,11 @@ class StoppedVehicleRescuer:
             search = self.inner.search(image)  # only on frames with missed tracks
             uids = np.ascontiguousarray(uids, np.int64).reshape(-1)
             wh = np.ascontiguousarray(wh, np.float64).reshape(-1, 2)
-            ints, floats = table_arrays(tab)
+            ints, floats = _arrays(tab)
             # each track's row, last measurement, template box and the place where its
             # vehicle was last seen (the box's centre when the last measurement lies within
             # one box length of it: the fragments of a fading vehicle wander inside its box)
-            at, last, box, centre = missed_places(ints, floats, uids, *self._bank_rows(tab))
+            at, last, box, centre = missed_places(ints, floats, uids, *self._bank_rows())
             # every missed track is searched, the ones that cannot stand too: the bank cuts a
             # template from its kept frame only when it is searched (the next frame's search
             # of a track that slowed down needs it)
@@ -259,19 +246,14 @@ class StoppedVehicleRescuer:
         """Whether the pieces of standing vehicles are held (a bank that keeps boxes)."""
         return self.pieces and hasattr(getattr(self.inner, "bank", None), "boxes")
 
-    def _bank_rows(self, tab: Any) -> tuple[IntArray, FloatArray]:
-        """The template bank's sorted uids (sentinel last) and rows, box in columns 0–3 (a
-        :class:`~mvtrack.detection.track_boxes.TrackBoxes`' own; for another bank with
-        ``boxes``, its boxes of the tracks of ``tab``); a bank without boxes gives none (NaN
-        boxes)."""
+    def _bank_rows(self) -> tuple[IntArray, FloatArray]:
+        """The template bank's sorted uids (sentinel last) and rows, box in columns 0–3
+        (:meth:`~mvtrack.detection.track_boxes.TrackBoxes.rows`); a bank without boxes gives
+        none (NaN boxes)."""
         bank = getattr(self.inner, "bank", None)
         if bank is None or not hasattr(bank, "boxes"):
             return _EMPTY_BANK
-        if hasattr(bank, "rows"):
-            return bank.rows()
-        uids = np.unique(np.asarray(tab.uid, np.int64))
-        boxes = np.asarray(bank.boxes(uids), np.float64).reshape(-1, 4)
-        return np.append(uids, _EMPTY_BANK[0]), np.vstack([boxes, _EMPTY_BANK[1][:, :4]])
+        return bank.rows()
 
     def _motion(self, tab: Any, at: IntArray) -> tuple[FloatArray, IntArray]:
         """The velocities of the tracks at rows ``at`` of ``tab`` and the frames since their last
@@ -324,8 +306,8 @@ class StoppedVehicleRescuer:
                 and len(bank)):
             return out
         tab = self.tracker.tracks
-        uids, box, inside = standing_pieces(*table_arrays(tab), self._standing,
-                                            *self._bank_rows(tab), dets.xy, dets.wh, self.max_shift)
+        uids, box, inside = standing_pieces(*_arrays(tab), self._standing,
+                                            *self._bank_rows(), dets.xy, dets.wh, self.max_shift)
         if uids.size == 0:
             return out
         found, xy, score = self._search(self.inner.search(image), uids, box[:, :2],
