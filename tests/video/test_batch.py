@@ -231,6 +231,8 @@ def test_cli_exit_codes_and_failure_lines(videos, tmp_path, scheduler, capsys) -
         (["{video}", "--predictor", "psychic"], "psychic"),
         (["{video}", "--detector", "yolo"], "yolo"),
         (["{video}", "--out-dir", "x"], "out-dir"),
+        (["{video}", "--snapshot", "-1"], "--snapshot must be a frame index >= 0"),
+        (["{video}", "--max-frames", "5", "--snapshot", "5"], "--snapshot 5 is past"),
     ],
 )
 def test_cli_bad_usage_exits_2_before_any_work(tmp_path, capsys, args, needle) -> None:
@@ -315,3 +317,51 @@ def test_batch_offline_gives_the_files_of_track_offline(videos, tmp_path, schedu
     assert (seq / "results.txt").read_bytes() != (online / "results.txt").read_bytes()
     summary = json.loads((out / "boxes" / "summary.json").read_text())
     assert summary["settings"]["offline"] is True
+
+
+def test_batch_snapshots_are_the_pictures_of_track(videos, tmp_path, scheduler, capsys) -> None:
+    """``--snapshot`` (twice) saves in each video's folder the pictures `mvtrack track` saves
+    for it, byte for byte; a video too short for one of them fails on its own, named."""
+    out = tmp_path / "batch"
+    code = main(["batch", str(videos["boxes"]), str(videos["cam_a"]), "--out", str(out),
+                 "--scheduler", scheduler, "--no-video", "--snapshot", "35", "--snapshot",
+                 "12"])
+    assert code == 1  # the box video has 30 frames
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--snapshot 35 is past the last frame 29 of {videos['boxes']}" \
+        in err[0]
+    data = json.loads((out / "batch.json").read_text())
+    assert [v["status"] for v in data["videos"]] == ["failed", "ok"]
+    assert not (out / "boxes" / "results.txt").exists()
+    seq = tmp_path / "seq"
+    assert main(["track", str(videos["cam_a"]), "--out", str(seq), "--no-video",
+                 "--snapshot", "12", "--snapshot", "35"]) == 0
+    files = json.loads((out / "cam" / "summary.json").read_text())["files"]
+    assert files["snapshot 12"] == "frame00012.png" and files["snapshot 35"] == "frame00035.png"
+    for name in ("frame00012.png", "frame00035.png"):
+        assert (out / "cam" / name).read_bytes() == (seq / name).read_bytes()
+
+
+def test_track_one_names_a_snapshot_an_unknown_length_source_never_reached(
+        tmp_path, monkeypatch) -> None:
+    """A source without a known length is tracked to its end; the frame it never reached
+    makes the video ``failed`` with that frame named, and its tracks and the pictures it did
+    reach are kept."""
+    import mvtrack.io.video as io_video
+
+    opened = io_video.open_source
+
+    def unknown_length(*args, **kwargs):  # type: ignore[no-untyped-def]
+        src = opened(*args, **kwargs)
+        src.frame_count = None
+        return src
+
+    monkeypatch.setattr(io_video, "open_source", unknown_length)
+    video = box_video(tmp_path / "v.avi", n=30)
+    out = tmp_path / "out"
+    item = track_one(str(video), str(out), NO_VIDEO, snapshot=(12, 40))
+    assert item["status"] == "failed"
+    assert item["error"] == (f"--snapshot 40: {video} ended after 30 frames (0 to 29), so "
+                             f"that frame was not saved; the tracks are in {out}")
+    assert (out / "results.txt").exists()
+    assert sorted(p.name for p in out.glob("frame*.png")) == ["frame00012.png"]

@@ -56,6 +56,11 @@ MinScore = Annotated[
     typer.Option(help="Calibrated score in [0, 1] below which detections are dropped "
                  "(default: the preset's).", show_default=False),
 ]
+Snapshot = Annotated[
+    list[int] | None,
+    typer.Option(help="Also save the annotated frame N (0-based) as frameNNNNN.png; give it "
+                 "again for more frames."),
+]
 Force = Annotated[
     bool,
     typer.Option("--force", help="Write into an --out folder that holds files mvtrack did not "

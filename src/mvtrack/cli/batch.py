@@ -23,6 +23,7 @@ from mvtrack.cli._options import (
     Predictor,
     Preset,
     ScoreHigh,
+    Snapshot,
     video_settings,
 )
 
@@ -148,6 +149,7 @@ def register(app: typer.Typer) -> None:
         fps: Annotated[
             float | None, typer.Option(help="Frame rate to assume instead of each source's.")
         ] = None,
+        snapshot: Snapshot = None,
     ) -> None:
         """Track many videos in parallel, each exactly as `mvtrack track` would, into
         --out/<video name>/; write --out/batch.json (status, frames, tracks, speed, error per
@@ -160,6 +162,7 @@ def register(app: typer.Typer) -> None:
         from mvtrack.cli import _signals
         from mvtrack.io.outdir import run_folder
         from mvtrack.video.batch import track_many
+        from mvtrack.video.run import snapshot_frames
 
         if workers is not None and workers < 1:
             raise ValueError(f"--workers must be at least 1, got {workers}")
@@ -167,6 +170,7 @@ def register(app: typer.Typer) -> None:
             raise ValueError("--workers sets up a local cluster; do not give it with --scheduler")
         if max_frames is not None and max_frames < 1:
             raise ValueError(f"--max-frames must be at least 1, got {max_frames}")
+        shots = snapshot_frames(snapshot, max_frames)
         sources = expand_videos(videos)
 
         # the same settings as `mvtrack track` builds from the same options
@@ -180,7 +184,7 @@ def register(app: typer.Typer) -> None:
         with run_folder(out, force=force, inputs=sources, kind="batch"):
             items = track_many(
                 sources, out, settings, workers=workers, scheduler=scheduler,
-                fps=settings.frame_rate, max_frames=max_frames,
+                fps=settings.frame_rate, max_frames=max_frames, snapshot=shots,
             )
         ok = [it for it in items if it.status == "ok"]
         failed = [it for it in items if it.status == "failed"]

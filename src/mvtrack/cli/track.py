@@ -24,6 +24,7 @@ from mvtrack.cli._options import (
     Predictor,
     Preset,
     ScoreHigh,
+    Snapshot,
     speed_note,
     video_settings,
 )
@@ -71,11 +72,7 @@ def register(app: typer.Typer) -> None:
             typer.Option(help="Frame rate to assume instead of the source's (also [tracker] fps "
                          "in --config; this option wins)."),
         ] = None,
-        snapshot: Annotated[
-            list[int] | None,
-            typer.Option(help="Also save the annotated frame N (0-based) as frameNNNNN.png; "
-                         "give it again for more frames."),
-        ] = None,
+        snapshot: Snapshot = None,
         flush: Annotated[
             float | None,
             typer.Option(
@@ -115,16 +112,11 @@ def register(app: typer.Typer) -> None:
         from mvtrack.errors import InputError
         from mvtrack.io.outdir import run_folder
         from mvtrack.video import track_video
-        from mvtrack.video.run import snapshot_frames, write_tables
+        from mvtrack.video.run import missed_snapshot, snapshot_frames, write_tables
 
         if max_frames is not None and max_frames < 1:
             raise InputError(f"--max-frames must be at least 1, got {max_frames}")
-        shots = snapshot_frames(snapshot)
-        if shots and shots[0] < 0:
-            raise InputError(f"--snapshot must be a frame index >= 0, got {shots[0]}")
-        if shots and max_frames is not None and shots[-1] >= max_frames:
-            raise InputError(f"--snapshot {shots[-1]} is past the last frame tracked "
-                             f"(--max-frames {max_frames}: frames 0 to {max_frames - 1})")
+        shots = snapshot_frames(snapshot, max_frames)
         if flush is not None and not (math.isfinite(flush) and flush > 0):
             raise InputError(f"--flush must be a number of seconds > 0, got {flush:g}")
         settings = video_settings(
@@ -156,8 +148,6 @@ def register(app: typer.Typer) -> None:
             raise typer.Exit(_signals.interrupt_status())
         if res.error is not None:
             raise InputError(f"{res.error}; results so far are in {out}")
-        missed = [k for k in shots if f"snapshot {k}" not in run.paths]
+        missed = missed_snapshot(run, shots, video)
         if missed:
-            raise InputError(f"--snapshot {missed[0]}: {video} ended after {res.n_frames} frames "
-                             f"(0 to {res.n_frames - 1}), so that frame was not saved; the tracks "
-                             f"are in {out}")
+            raise InputError(f"{missed}; the tracks are in {out}")

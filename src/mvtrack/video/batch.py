@@ -34,7 +34,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -114,6 +114,7 @@ def track_many(
     scheduler: str | None = None,
     fps: float | None = None,
     max_frames: int | None = None,
+    snapshot: Sequence[int] = (),
     progress: bool | None = None,
     on_result: Callable[[BatchItem], None] | None = None,
     timeout: float = 10.0,
@@ -139,6 +140,10 @@ def track_many(
         Frame rate to assume instead of each source's.
     max_frames : int, optional
         Track at most this many frames of each video.
+    snapshot : sequence of int
+        Frames of each video to save as annotated pictures (``frameNNNNN.png``). A video
+        too short for one of them is ``failed`` with its tracks written, as ``mvtrack track``
+        would exit.
     progress : bool, optional
         Force the progress bar over videos on or off (default: on when stderr is a terminal).
     on_result : callable, optional
@@ -221,6 +226,7 @@ def track_many(
             stop = Event(stop_name, client=client)
             futures = client.map(
                 track_one, sources, outs, settings=settings, fps=fps, max_frames=max_frames,
+                snapshot=tuple(snapshot),
                 stop=stop_name, pure=False,
             )
             index = {f.key: i for i, f in enumerate(futures)}

@@ -127,6 +127,7 @@ def track_one(
     *,
     fps: float | None = None,
     max_frames: int | None = None,
+    snapshot: Sequence[int] = (),
     stop: str | None = None,
 ) -> dict[str, Any]:
     """Track one video into ``out`` exactly as ``mvtrack track`` does; never raises.
@@ -151,6 +152,9 @@ def track_one(
         Frame rate to assume instead of the source's.
     max_frames : int, optional
         Stop after this many frames.
+    snapshot : sequence of int
+        Frames to save as annotated pictures; a source that ends before one of them is
+        ``failed`` with that frame named and the tracks written.
     stop : str, optional
         Name of a :class:`distributed.Event` (in a Dask task only): once it is set, the frame
         loop ends as on Ctrl-C and the files of the frames tracked so far are written, so an
@@ -165,18 +169,18 @@ def track_one(
     """
     import cv2
 
-    from mvtrack.video.run import track_video, write_tables
+    from mvtrack.video.run import missed_snapshot, track_video, write_tables
 
     cv2.setNumThreads(1)
     t0 = time.perf_counter()
     item = BatchItem(video=video, out=out, status="failed")
     try:
         if stop is None:
-            run = track_video(
-                video, out, settings, fps=fps, max_frames=max_frames, progress=False
-            )
+            run = track_video(video, out, settings, fps=fps, max_frames=max_frames,
+                              progress=False, snapshot=snapshot)
         else:
-            run = _track_until_stopped(video, out, settings, fps, max_frames, _StopFlag(stop))
+            run = _track_until_stopped(video, out, settings, fps, max_frames, snapshot,
+                                       _StopFlag(stop))
         write_tables(run, out, settings, fps=fps)  # as `mvtrack track` does after its run
     except KeyboardInterrupt:
         item.status, item.error = "cancelled", "interrupted before any frame was tracked"
@@ -191,6 +195,8 @@ def track_one(
             item.error = f"interrupted after {res.n_frames} frames; results so far are in {out}"
         elif res.error is not None:
             item.error = f"{' '.join(res.error.split())}; results so far are in {out}"
+        elif (missed := missed_snapshot(run, snapshot, video)) is not None:
+            item.error = f"{missed}; the tracks are in {out}"
         else:
             item.status = "ok"
     item.seconds = round(time.perf_counter() - t0, 3)
@@ -223,24 +229,26 @@ class _StopFlag:
 
 
 def _track_until_stopped(video: str, out: str, settings: RunSettings, fps: float | None,
-                         max_frames: int | None, flag: _StopFlag) -> Any:
+                         max_frames: int | None, snapshot: Sequence[int],
+                         flag: _StopFlag) -> Any:
     """:func:`mvtrack.video.track_video` with its frames taken through ``flag``."""
     from mvtrack.io.video import open_source
     from mvtrack.video.build import build_detector, build_tracker
-    from mvtrack.video.run import source_reader, track_to_folder
+    from mvtrack.video.run import check_reach, source_reader, track_to_folder
     from mvtrack.video.settings import resolve_settings
 
     if flag.is_set():  # the batch was interrupted before this video started
         raise KeyboardInterrupt
     src = open_source(video, fps=fps)
     with src:
+        check_reach(snapshot, src.frame_count, max_frames, video)
         resolved = resolve_settings(settings, src.size, src.fps)
         parts = (build_detector(resolved), build_tracker(resolved, src.fps))
         return track_to_folder(
             flag.frames(frame for _, frame in src), fps=src.fps, size=src.size,
             settings=resolved, out=out, max_frames=max_frames, total=src.frame_count,
             source=str(video), progress=False, parts=parts, source_error=lambda: src.error,
-            reread=source_reader(video, fps),
+            snapshot=snapshot, reread=source_reader(video, fps),
         )
 
 

@@ -40,12 +40,39 @@ class RunOutput:
     paths: dict[str, Path]
 
 
-def snapshot_frames(snapshot: int | Sequence[int] | None) -> tuple[int, ...]:
+def snapshot_frames(snapshot: int | Sequence[int] | None,
+                    max_frames: int | None = None) -> tuple[int, ...]:
     """The frame indices to save as pictures, sorted and once each (``--snapshot``, which
-    may be given more than once); none for None."""
+    may be given more than once); none for None.
+
+    Raises
+    ------
+    InputError
+        A negative index, or one at or past ``max_frames`` (the frames to be tracked).
+    """
+    from mvtrack.errors import InputError
+
     if snapshot is None:
         return ()
-    return tuple(sorted({int(snapshot)} if isinstance(snapshot, int) else set(snapshot)))
+    shots = tuple(sorted({int(snapshot)} if isinstance(snapshot, int) else set(snapshot)))
+    if shots and shots[0] < 0:
+        raise InputError(f"--snapshot must be a frame index >= 0, got {shots[0]}")
+    if shots and max_frames is not None and shots[-1] >= max_frames:
+        raise InputError(f"--snapshot {shots[-1]} is past the last frame tracked "
+                         f"(--max-frames {max_frames}: frames 0 to {max_frames - 1})")
+    return shots
+
+
+def missed_snapshot(run: RunOutput, snapshot: int | Sequence[int] | None,
+                    video: str | int) -> str | None:
+    """The one-line error for the first ``snapshot`` frame that a source of unknown length
+    did not reach (nothing was saved for it; the tracks were written), or None."""
+    missed = [k for k in snapshot_frames(snapshot) if f"snapshot {k}" not in run.paths]
+    if not missed:
+        return None
+    n = run.result.n_frames
+    return (f"--snapshot {missed[0]}: {video} ended after {n} frames (0 to {n - 1}), so that "
+            f"frame was not saved")
 
 
 def _track_lengths(log: Any) -> NDArray[np.int64]:
@@ -452,18 +479,11 @@ def track_video(
         Missing, unreadable or empty source; bad settings; a ``snapshot`` past the last
         frame of a source whose length is known.
     """
-    from mvtrack.errors import InputError
     from mvtrack.io.video import open_source
 
     src = open_source(video, fps=fps)
     with src:
-        last = src.frame_count if max_frames is None else min(src.frame_count or max_frames,
-                                                               max_frames)
-        late = [k for k in snapshot_frames(snapshot) if last is not None and k >= last]
-        if late:
-            raise InputError(f"--snapshot {late[0]} is past the last frame {last - 1} of "
-                             f"{video}" + ("" if last == src.frame_count else
-                                           f" tracked (--max-frames {max_frames})"))
+        check_reach(snapshot, src.frame_count, max_frames, video)
         resolved = resolve_settings(settings, src.size, src.fps)
         parts = (build_detector(resolved), build_tracker(resolved, src.fps))
         return track_to_folder(
@@ -472,6 +492,20 @@ def track_video(
             progress=progress, parts=parts, source_error=lambda: src.error, snapshot=snapshot,
             flush=flush, masks=masks, reread=source_reader(video, fps),
         )
+
+
+def check_reach(snapshot: int | Sequence[int] | None, frame_count: int | None,
+                max_frames: int | None, video: str | int) -> None:
+    """Refuse, before any file is written, a ``snapshot`` frame past the last frame to be
+    tracked of a source of ``frame_count`` frames (None: unknown, nothing is refused)."""
+    from mvtrack.errors import InputError
+
+    last = frame_count if max_frames is None else min(frame_count or max_frames, max_frames)
+    late = [k for k in snapshot_frames(snapshot) if last is not None and k >= last]
+    if late:
+        raise InputError(f"--snapshot {late[0]} is past the last frame {last - 1} of {video}"
+                         + ("" if last == frame_count else
+                            f" tracked (--max-frames {max_frames})"))
 
 
 def source_reader(video: str | int, fps: float | None) -> Callable[[], Iterable[Image]] | None:
