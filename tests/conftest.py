@@ -1,4 +1,5 @@
-"""Shared fixtures: the ../shared folder beside the checkout (papers, spec, real video)."""
+"""Shared fixtures: the ../shared folder beside the checkout (papers, spec, real video), and a
+source without a known length."""
 
 from __future__ import annotations
 
@@ -29,3 +30,19 @@ def shared_dir() -> Path:
 def vtest_path() -> Path:
     """../shared/data/vtest.avi, the real 768×576 campus recording."""
     return _require_shared("data", "vtest.avi")
+
+
+@pytest.fixture
+def unknown_length(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every source opened through :func:`mvtrack.io.video.open_source` reports no length,
+    as a camera or a network stream does."""
+    import mvtrack.io.video as io_video
+
+    opened = io_video.open_source
+
+    def without_length(*args, **kwargs):  # type: ignore[no-untyped-def]
+        src = opened(*args, **kwargs)
+        src.frame_count = None
+        return src
+
+    monkeypatch.setattr(io_video, "open_source", without_length)

@@ -54,20 +54,11 @@ def test_a_snapshot_past_the_last_frame_is_refused_before_the_run(tmp_path: Path
     assert (out / "frame00029.png").exists()
 
 
+@pytest.mark.usefixtures("unknown_length")
 def test_a_snapshot_never_reached_on_a_source_of_unknown_length_is_said(
-        tmp_path: Path, capsys, monkeypatch) -> None:
+        tmp_path: Path, capsys) -> None:
     """A camera or stream has no length to check first: the run is kept, and one line says
     that no frame was saved."""
-    import mvtrack.io.video as io_video
-
-    opened = io_video.open_source
-
-    def unknown_length(*args, **kwargs):  # type: ignore[no-untyped-def]
-        src = opened(*args, **kwargs)
-        src.frame_count = None
-        return src
-
-    monkeypatch.setattr(io_video, "open_source", unknown_length)
     video = box_video(tmp_path / "v.avi", n=30)
     out = tmp_path / "out"
     assert main(["track", str(video), "--out", str(out), "--snapshot", "40",

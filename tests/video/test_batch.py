@@ -342,21 +342,11 @@ def test_batch_snapshots_are_the_pictures_of_track(videos, tmp_path, scheduler, 
         assert (out / "cam" / name).read_bytes() == (seq / name).read_bytes()
 
 
-def test_track_one_names_a_snapshot_an_unknown_length_source_never_reached(
-        tmp_path, monkeypatch) -> None:
+@pytest.mark.usefixtures("unknown_length")
+def test_track_one_names_a_snapshot_an_unknown_length_source_never_reached(tmp_path) -> None:
     """A source without a known length is tracked to its end; the frame it never reached
     makes the video ``failed`` with that frame named, and its tracks and the pictures it did
     reach are kept."""
-    import mvtrack.io.video as io_video
-
-    opened = io_video.open_source
-
-    def unknown_length(*args, **kwargs):  # type: ignore[no-untyped-def]
-        src = opened(*args, **kwargs)
-        src.frame_count = None
-        return src
-
-    monkeypatch.setattr(io_video, "open_source", unknown_length)
     video = box_video(tmp_path / "v.avi", n=30)
     out = tmp_path / "out"
     item = track_one(str(video), str(out), NO_VIDEO, snapshot=(12, 40))
