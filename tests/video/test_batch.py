@@ -62,9 +62,15 @@ def _sequential(video: Path, out: Path, *extra: str) -> bytes:
 
 
 def test_output_names_unique_in_input_order() -> None:
+    # a stem nobody shares stays; colliding stems (also by case) take their folders
     names = output_names(["x/cam.avi", "y/cam.avi", "cam-2.mp4", "z/CAM.mp4", "frames/"])
-    assert names == ["cam", "cam-2", "cam-2-2", "CAM-3", "frames"]
-    assert len({n.lower() for n in names}) == len(names)
+    assert names == ["x_cam", "y_cam", "cam-2", "z_CAM", "frames"]
+    # MOT-layout image folders are named by their sequence, as deep as needed to differ
+    seqs = output_names(["/d/US101-1/img1", "/d/US101-2/img1/", "/e/run/img1", "/f/run/img1"])
+    assert seqs == ["US101-1_img1", "US101-2_img1", "e_run_img1", "f_run_img1"]
+    # the same video twice, or folders that cannot tell two apart, fall back on -2, -3, ...
+    twice = output_names(["/s/v.avi", "/s/v.avi", "s_v.mp4", "v/"])
+    assert twice == ["s_v", "s_v-2", "s_v-3", "v"]
 
 
 def test_parallel_local_cluster_gives_sequential_results(videos, tmp_path) -> None:
@@ -74,7 +80,7 @@ def test_parallel_local_cluster_gives_sequential_results(videos, tmp_path) -> No
     assert dict(os.environ) == environ  # the workers' settings do not leak into the caller
 
     assert [it.status for it in items] == ["ok", "ok", "ok"], items
-    assert [Path(it.out).name for it in items] == ["cam", "boxes", "cam-2"]
+    assert [Path(it.out).name for it in items] == ["a_cam", "boxes", "b_cam"]
     data = json.loads((tmp_path / "batch" / "batch.json").read_text())
     assert (data["workers"], data["scheduler"], data["ok"]) == (2, None, 3)
     for i, (video, item) in enumerate(zip(order, items, strict=True)):

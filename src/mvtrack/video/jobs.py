@@ -12,6 +12,7 @@ import glob
 import os
 import re
 import time
+from collections import Counter
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -82,32 +83,58 @@ def normalise_video(video: str | os.PathLike[str]) -> str:
 
 
 def output_names(videos: Sequence[str | os.PathLike[str]]) -> list[str]:
-    """Folder names for ``videos``: each video's stem, made unique in input order.
+    """Folder names for ``videos``: each stem, told apart by its folders where stems collide.
 
-    The first ``traffic`` stays ``traffic``; later ones become ``traffic-2``, ``traffic-3``, ...
-    skipping any name already taken (also by a stem that itself ends in ``-2``). Names are
-    compared case-insensitively, so the folders differ on case-insensitive file systems too.
+    A stem that no other video shares names the folder as it is (``a/cam.avi`` gives ``cam``).
+    Videos whose stems collide are named by as many of their parent folders as tell them apart,
+    joined with ``_``: ``a/cam.avi`` beside ``b/cam.avi`` gives ``a_cam`` and ``b_cam``, and the
+    image folders of a MOT layout, ``US101-1/img1`` beside ``US101-2/img1``, give ``US101-1_img1``
+    and ``US101-2_img1``. Names that the folders cannot tell apart (the same video given twice)
+    get ``-2``, ``-3``, ... in input order, skipping any name already taken. Names are compared
+    case-insensitively, so the folders differ on case-insensitive file systems too.
 
     Examples
     --------
-    >>> output_names(["a/cam.avi", "b/cam.avi", "cam-2.mp4", "c/cam.mp4"])
-    ['cam', 'cam-2', 'cam-2-2', 'cam-3']
+    >>> output_names(["x/a/cam.avi", "y/b/cam.avi", "cam-2.mp4", "z/b/cam.mp4", "frames/"])
+    ['a_cam', 'y_b_cam', 'cam-2', 'z_b_cam', 'frames']
+    >>> output_names(["s/v.avi", "s/v.avi"])
+    ['s_v', 's_v-2']
     """
-    stems = []
-    for video in videos:
-        text = os.fspath(video).rstrip("/\\")
-        stem = re.sub(r"[^\w.-]+", "_", Path(text).stem) if text else ""
-        stems.append(stem.strip(".") or "video")
+    paths = [_name_parts(video) for video in videos]
+    depth = [1] * len(paths)
+    while True:  # widen each colliding name by one folder until none collides or none can widen
+        names = [_join(parts, d) for parts, d in zip(paths, depth, strict=True)]
+        counts = Counter(name.lower() for name in names)
+        widen = [i for i, name in enumerate(names)
+                 if counts[name.lower()] > 1 and depth[i] < len(paths[i])]
+        if not widen:
+            break
+        for i in widen:
+            depth[i] += 1
     taken: set[str] = set()
-    names: list[str] = []
-    for stem in stems:
+    unique: list[str] = []
+    for stem in names:
         name, n = stem, 1
         while name.lower() in taken:
             n += 1
             name = f"{stem}-{n}"
         taken.add(name.lower())
-        names.append(name)
-    return names
+        unique.append(name)
+    return unique
+
+
+def _name_parts(video: str | os.PathLike[str]) -> list[str]:
+    """A video's stem and then its parent folders, innermost first, each made safe for a name."""
+    text = os.fspath(video).rstrip("/\\")
+    path = Path(text)
+    parts = [path.stem] + [p.name for p in path.parents if p.name]
+    safe = [re.sub(r"[^\w.-]+", "_", part).strip(".") for part in parts]
+    return [safe[0] or "video"] + [part for part in safe[1:] if part]
+
+
+def _join(parts: list[str], depth: int) -> str:
+    """The name of ``depth`` parts: the outermost folder first, the stem last."""
+    return "_".join(reversed(parts[:depth]))
 
 
 # --------------------------------------------------------------------------- one video (worker)
