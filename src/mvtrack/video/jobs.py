@@ -202,12 +202,12 @@ def track_one(
     t0 = time.perf_counter()
     item = BatchItem(video=video, out=out, status="failed")
     try:
-        if stop is None:
-            run = track_video(video, out, settings, fps=fps, max_frames=max_frames,
-                              progress=False, snapshot=snapshot)
-        else:
-            run = _track_until_stopped(video, out, settings, fps, max_frames, snapshot,
-                                       _StopFlag(stop))
+        flag = None if stop is None else _StopFlag(stop)
+        if flag is not None and flag.is_set():  # the batch was interrupted before this video
+            raise KeyboardInterrupt
+        run = track_video(video, out, settings, fps=fps, max_frames=max_frames,
+                          progress=False, snapshot=snapshot,
+                          take=None if flag is None else flag.frames)
         write_tables(run, out, settings, fps=fps)  # as `mvtrack track` does after its run
     except KeyboardInterrupt:
         item.status, item.error = "cancelled", "interrupted before any frame was tracked"
@@ -253,30 +253,6 @@ class _StopFlag:
                 if self.is_set():
                     raise KeyboardInterrupt
             yield frame
-
-
-def _track_until_stopped(video: str, out: str, settings: RunSettings, fps: float | None,
-                         max_frames: int | None, snapshot: Sequence[int],
-                         flag: _StopFlag) -> Any:
-    """:func:`mvtrack.video.track_video` with its frames taken through ``flag``."""
-    from mvtrack.io.video import open_source
-    from mvtrack.video.build import build_detector, build_tracker
-    from mvtrack.video.run import check_reach, source_reader, track_to_folder
-    from mvtrack.video.settings import resolve_settings
-
-    if flag.is_set():  # the batch was interrupted before this video started
-        raise KeyboardInterrupt
-    src = open_source(video, fps=fps)
-    with src:
-        check_reach(snapshot, src.frame_count, max_frames, video)
-        resolved = resolve_settings(settings, src.size, src.fps)
-        parts = (build_detector(resolved), build_tracker(resolved, src.fps))
-        return track_to_folder(
-            flag.frames(frame for _, frame in src), fps=src.fps, size=src.size,
-            settings=resolved, out=out, max_frames=max_frames, total=src.frame_count,
-            source=str(video), progress=False, parts=parts, source_error=lambda: src.error,
-            snapshot=snapshot, reread=source_reader(video, fps),
-        )
 
 
 def finished_on_disk(item: BatchItem, since: float) -> BatchItem | None:

@@ -452,6 +452,7 @@ def track_video(
     snapshot: int | Sequence[int] | None = None,
     flush: float | None = None,
     masks: str | os.PathLike[str] | None = None,
+    take: Callable[[Iterable[Image]], Iterable[Image]] | None = None,
 ) -> RunOutput:
     """Open ``video``, build its parts for its size and frame rate, and :func:`track_to_folder`.
 
@@ -472,6 +473,9 @@ def track_video(
         Frame rate to assume instead of the source's.
     max_frames, progress, snapshot, flush, masks
         As in :func:`track_to_folder`.
+    take : callable, optional
+        Wraps the source's frames on their way to the tracker (a batch job's stop flag, which
+        ends the loop as Ctrl-C does).
 
     Raises
     ------
@@ -486,8 +490,9 @@ def track_video(
         check_reach(snapshot, src.frame_count, max_frames, video)
         resolved = resolve_settings(settings, src.size, src.fps)
         parts = (build_detector(resolved), build_tracker(resolved, src.fps))
+        frames: Iterable[Image] = (frame for _, frame in src)
         return track_to_folder(
-            (frame for _, frame in src), fps=src.fps, size=src.size, settings=resolved,
+            frames if take is None else take(frames), fps=src.fps, size=src.size, settings=resolved,
             out=out, max_frames=max_frames, total=src.frame_count, source=str(video),
             progress=progress, parts=parts, source_error=lambda: src.error, snapshot=snapshot,
             flush=flush, masks=masks, reread=source_reader(video, fps),
