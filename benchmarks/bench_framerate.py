@@ -297,6 +297,8 @@ RULES: dict[str, tuple[dict[str, Any], dict[str, bool]]] = {
     "two stages by score (score_high; off: every detection high)": ({"score_high": None}, {}),
     "dropped weak boxes (min_score 0.1; off: 0)": ({"min_score": 0.0}, {}),
     "no birth on a tracked object (birth_iou; off: None)": ({"birth_iou": None}, {}),
+    "a weak box shared with another track weighed less (shared_iou 0.4; off: None)": (
+        {"shared_iou": None}, {}),
     "confirmation by score (confirm_score 1; off: 0)": ({"confirm_score": 0.0}, {}),
     "loss by uncertainty (lost_std; off: max_misses only)": ({"lost_std": None}, {}),
     "lives through min_misses (3; off: 0)": ({"min_misses": 0}, {}),

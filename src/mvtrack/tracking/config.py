@@ -106,6 +106,10 @@ class TrackerConfig:
     birth_iou : float or None
         A detection left over starts a track only if its box overlaps no live track's box by
         this IoU or more. None: every one left over starts a track.
+    shared_iou : float or None
+        A weak box (under ``score_high``) that overlaps another track's predicted box by more
+        than this IoU is shared: its centre's std widens to the offset of two such boxes,
+        ``(1 − t) / (1 + t)`` box sizes (:mod:`mvtrack.association.shared`). None: off.
     warmup : int
         The papers' presets: paper 1's warm-up gate centre ``2 y_k − y_{k−1}`` until a track
         has this many associations (SPEC §1.1 [R]); 0: off.
@@ -136,6 +140,7 @@ class TrackerConfig:
     score_high: float | None = 0.5
     min_score: float = 0.1
     birth_iou: float | None = 0.3
+    shared_iou: float | None = 0.4
     warmup: int = 0
     output_tentative: bool = False
 
@@ -176,7 +181,7 @@ class TrackerConfig:
             check_scale(self.score_scale)
         except ValueError as exc:
             raise bad("score_scale", str(exc)) from None
-        for name in ("score_high", "min_score", "birth_iou"):
+        for name in ("score_high", "min_score", "birth_iou", "shared_iou"):
             v = getattr(self, name)
             if v is None and name != "min_score":
                 continue

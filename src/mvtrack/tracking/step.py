@@ -12,10 +12,11 @@ so a frame costs two calls instead of a few dozen array operations — the diffe
    (:mod:`mvtrack.association.gate`) and the assignment in two stages by score
    (:func:`mvtrack.association.assign.associate`);
 2. :func:`update_commit`: each track's measurement
-   (:func:`mvtrack.tracking.lifecycle.measurements`), the update of each model and of the
-   mode probabilities (:func:`~mvtrack.filters.imm.imm_update`), one frame of the life cycle
-   with its IDs, rows and births (:func:`mvtrack.tracking.lifecycle.commit`), and the new
-   tracks' filters (:meth:`mvtrack.filters.imm.KalmanIMMPredictor.init`).
+   (:func:`mvtrack.tracking.lifecycle.measurements`) and its noise, wider for a weak box
+   shared with another track (:mod:`mvtrack.association.shared`), the update of each model
+   and of the mode probabilities (:func:`~mvtrack.filters.imm.imm_update`), one frame of the
+   life cycle with its IDs, rows and births (:func:`mvtrack.tracking.lifecycle.commit`), and
+   the new tracks' filters (:meth:`mvtrack.filters.imm.KalmanIMMPredictor.init`).
 
 The rescue of stopped vehicles (template matching) runs between the two, in Python. Nothing
 here is a second implementation: each step is the function of its own module, called from here
@@ -31,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.association.assign import associate
+from mvtrack.association.shared import measurement_var, shared
 from mvtrack.filters.imm import imm_combine, imm_init, imm_predict, imm_update
 from mvtrack.jit import kernel
 from mvtrack.tracking.lifecycle import P_FPS, W, commit, measurements
@@ -84,20 +86,20 @@ def update_commit(
     det_index: NDArray[np.intp], found: BoolArray, found_xy: FloatArray, dxy: FloatArray,
     dwh: FloatArray, dclass: NDArray[np.int8], cscore: FloatArray, std: FloatArray,
     centre: FloatArray, rz: float, speed2: FloatArray, k: int, params: FloatArray,
-    next_id: int, next_uid: int, pi: FloatArray,
+    next_id: int, next_uid: int, pi: FloatArray, t_shared: float,
 ):
     """Update every track with its measurement, advance the life cycle and start new tracks.
 
-    ``speed2`` (2,): the velocity prior of a new track, (box sizes/s)² per axis. Returns the
+    ``speed2`` (2,): the velocity prior of a new track, (box sizes/s)² per axis;
+    ``t_shared``: the overlap that makes a weak box shared (:mod:`mvtrack.association.shared`).
+    Returns the
     next frame's IMM state and table and the outputs of
     :func:`mvtrack.tracking.lifecycle.commit`.
     """
-    n = xp.shape[0]
     z, zwh, zscore, rescued, held = measurements(det_index, dxy, dwh, cscore, found, found_xy)
-    r = np.empty((n, 2))
-    for i in range(n):
-        rx, ry = rz * floats[i, W], rz * floats[i, W + 1]
-        r[i, 0], r[i, 1] = rx * rx, ry * ry
+    wh = np.ascontiguousarray(floats[:, W:W + 2])
+    r = measurement_var(rz, wh, shared(det_index, centre, wh, dxy, dwh, dclass, t_shared),
+                        t_shared)
     xu, Pu, mu = imm_update(xp, Pp, mp, z, held, r)  # eqs. (3)–(5) per model, and μ
     xc, _ = imm_combine(xu, Pu, mu)
     out = commit(ints, floats, det_index, rescued, z, zwh, zscore, std, centre,

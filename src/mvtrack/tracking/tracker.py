@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from mvtrack.association.assign import HIGH, LOW, RULE_CODES, associate
 from mvtrack.association.gate import Gate, GateRegions, tracker_gate, warmup_centre
+from mvtrack.association.shared import OFF, measurement_var, shared
 from mvtrack.association.view import TrackView
 from mvtrack.filters.imm import IMMState
 from mvtrack.filters.predictors import make_predictor
@@ -159,6 +160,7 @@ class Tracker:
             c.distance, c.gate, c.measurement_noise, c.velocity_prior, c.accel_noise, c.fps)
         self._size_w = 0.0 if c.size_noise is None else 1.0 / c.size_noise**2
         self._rule = RULE_CODES[c.assign]
+        self._t_shared = OFF if c.shared_iou is None else float(c.shared_iou)
         self._params = c.life_cycle(self.frame_size)
         self._scores = (
             ScoreCalibration(c.score_scale)
@@ -282,14 +284,17 @@ class Tracker:
                 ps.x, ps.P, ps.mu, ints, flo, det_index, fmask, fxy, dets.xy, dets.wh,
                 pending.dclass, pending.cscore, pending.std, pending.centre,
                 self.config.measurement_noise, self.speed_prior, k, self._params,
-                self._next_id, self._next_uid, self._pi,
+                self._next_id, self._next_uid, self._pi, self._t_shared,
             )
             ps = IMMState(x, P, mu)
         else:
             z, zwh, zscore, rescued, held = measurements(det_index, dets.xy, dets.wh,
                                                          pending.cscore, fmask, fxy)
             if n:
-                ps = self._update(ps, z, held, flo[:, WH])
+                ps = self._update(ps, z, held, flo[:, WH],
+                                  shared(det_index, pending.centre, np.ascontiguousarray(
+                                      flo[:, WH]), dets.xy, dets.wh, pending.dclass,
+                                      self._t_shared))
             pos, vel = self.predictor.position(ps), self.predictor.velocity(ps)
             out = commit(ints, flo, det_index, rescued, z, zwh, zscore, pending.std,
                          pending.centre, np.ascontiguousarray(pos), np.ascontiguousarray(vel),
@@ -350,10 +355,13 @@ class Tracker:
         return self.predictor.predict(ps, *q) if self._pi is not None else \
             self.predictor.predict(ps, q[0])
 
-    def _update(self, ps: Any, z: FloatArray, held: BoolArray, wh: FloatArray) -> Any:
-        """Measurement update of the held tracks (NaN rows of ``z`` keep the prediction)."""
+    def _update(self, ps: Any, z: FloatArray, held: BoolArray, wh: FloatArray,
+                is_shared: BoolArray) -> Any:
+        """Measurement update of the held tracks (NaN rows of ``z`` keep the prediction);
+        a shared box's noise is wider (:mod:`mvtrack.association.shared`)."""
         if self.scales:
-            return self.predictor.update(ps, z, held, self.config.noise(wh)[0])
+            r = measurement_var(self.config.measurement_noise, wh, is_shared, self._t_shared)
+            return self.predictor.update(ps, z, held, r)
         return self.predictor.update(ps, z, held)
 
     def _init(self, xy: FloatArray, wh: FloatArray) -> Any:
