@@ -403,6 +403,7 @@ GRID: dict[str, tuple[Any, ...]] = {
     "size_noise": (0.15, 0.25, 0.4),
     "lost_std": (0.2, 0.3, 0.5),
     "birth_iou": (0.2, 0.3, 0.5),
+    "shared_iou": (0.3, 0.4, 0.5, None),
     "confirm_score": (0.8, 1.0, 1.3),
     "relink.SPEED_STD": (0.2, 0.4, 0.8),
     "relink.MAX_STD": (0.5, 0.7, 1.0),
