@@ -43,6 +43,7 @@ KERNEL_MODULES = (
     "filters/imm.py",
     "association/pairs.py",
     "association/assign.py",
+    "association/shared.py",
     "tracking/lifecycle.py",
     "tracking/step.py",
     "detection/background.py",
