@@ -37,7 +37,6 @@ __all__ = [
     "BY_QUADRATIC",
     "frame_pairs",
     "matrix_pairs",
-    "overlap_cost",
     "overlap_pairs",
     "quadratic_pairs",
 ]
@@ -178,7 +177,7 @@ def _grow(ti: IntArray, dj: IntArray, cost: FloatArray
 
 
 @kernel
-def overlap_cost(i: int, j: int, cx: FloatArray, twh: FloatArray, dxy: FloatArray,
+def _overlap_cost(i: int, j: int, cx: FloatArray, twh: FloatArray, dxy: FloatArray,
                   dwh: FloatArray, size_w: float) -> float:
     """``1 − IoU`` of track ``i``'s box (centre ``cx[i]``, size ``twh[i]``) and detection
     ``j``'s, plus ``size_w`` times the squared log ratios of the widths and heights.
@@ -233,7 +232,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
                   dwh: FloatArray, dsel: NDArray[np.bool_], gate: float, size_w: float
                   ) -> tuple[IntArray, IntArray, FloatArray]:
     """The pairs of selected tracks and detections within the ``iou`` gate, with their values
-    (:func:`overlap_cost`), sorted by track then detection.
+    (:func:`_overlap_cost`), sorted by track then detection.
 
     Boxes are centred on ``cx`` (N, 2) and ``dxy`` (M, 2) with sizes ``twh`` and ``dwh``.
     Below ``gate = 1`` a pair passes only if its boxes overlap (else ``1 − IoU = 1``), so a
@@ -251,7 +250,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
     if gate >= 1.0 or tr.size * dr.size <= _DENSE_TESTS:
         for i in tr:
             for j in dr:
-                c = overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
+                c = _overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
                 if c <= gate:
                     if k == ti.size:
                         ti, dj, cost = _grow(ti, dj, cost)
@@ -269,7 +268,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
     for b in range(dr.size):
         j = dr[b]
         w, h = dwh[j, 0], dwh[j, 1]
-        left, right = dxy[j, 0] - w / 2, dxy[j, 0] + w / 2  # as in overlap_cost
+        left, right = dxy[j, 0] - w / 2, dxy[j, 0] + w / 2  # as in _overlap_cost
         top, bottom = dxy[j, 1] - h / 2, dxy[j, 1] + h / 2
         if not (math.isfinite(left) and math.isfinite(right) and math.isfinite(top)
                 and math.isfinite(bottom)):
@@ -314,7 +313,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
     found = np.empty(nb, np.intp)
     for i in tr:
         w, h = twh[i, 0], twh[i, 1]
-        left, right = cx[i, 0] - w / 2, cx[i, 0] + w / 2  # as in overlap_cost
+        left, right = cx[i, 0] - w / 2, cx[i, 0] + w / 2  # as in _overlap_cost
         top, bottom = cx[i, 1] - h / 2, cx[i, 1] + h / 2
         if not (math.isfinite(left) and math.isfinite(right) and math.isfinite(top)
                 and math.isfinite(bottom)):
@@ -336,7 +335,7 @@ def overlap_pairs(cx: FloatArray, twh: FloatArray, tsel: NDArray[np.bool_], dxy:
         cand = np.sort(found[:f])  # this track's pairs in detection order
         for e in range(f):
             j = cand[e]
-            c = overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
+            c = _overlap_cost(i, j, cx, twh, dxy, dwh, size_w)
             if c <= gate:
                 if k == ti.size:
                     ti, dj, cost = _grow(ti, dj, cost)

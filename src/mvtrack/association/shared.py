@@ -6,7 +6,7 @@ updated with it at the usual measurement noise is pulled between the two, box an
 The tracker weighs such a box less (the measurement-origin uncertainty that JPDA weighs, here
 for the one box a track took): a detection is **shared** when it is weak (class ``LOW`` of
 :func:`mvtrack.association.assign.associate`, under ``score_high``) and overlaps the
-predicted box of a track other than its own by IoU > ``t`` (``TrackerConfig.shared_iou``,
+predicted box of a track other than its own by IoU ≥ ``t`` (``TrackerConfig.shared_iou``,
 0.4); its centre's std is then at least :func:`shared_std` box sizes.
 
 The std is the distance between the two objects the box may be on. Two boxes of one size
@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mvtrack.association.assign import LOW
-from mvtrack.association.pairs import overlap_cost
+from mvtrack.association.pairs import overlap_pairs
 from mvtrack.jit import kernel
 
 FloatArray = NDArray[np.float64]
@@ -52,18 +52,32 @@ def shared(det_index: NDArray[np.intp], centre: FloatArray, wh: FloatArray,
     ``det_index`` (N,): each track's detection (−1: none); ``centre``, ``wh`` (N, 2): the
     tracks' predicted centres and boxes; ``dxy``, ``dwh``, ``dclass`` (M, ...): the
     detections' centres, boxes and classes. Track ``i`` with detection ``j`` is shared when
-    ``dclass[j]`` is ``LOW`` and ``IoU(b_o, b_j) > t`` for some track ``o ≠ i``.
+    ``dclass[j]`` is ``LOW`` and ``IoU(b_o, b_j) ≥ t`` for some track ``o ≠ i``. The
+    overlapping pairs come from :func:`mvtrack.association.pairs.overlap_pairs` (a grid of
+    cells in a large frame), so the work grows with the pairs, not with ``N²``.
     """
-    n = det_index.shape[0]
+    n, m = det_index.shape[0], dxy.shape[0]
     out = np.zeros(n, np.bool_)
+    if t >= OFF or n < 2:
+        return out
+    dsel = np.zeros(m, np.bool_)
     for i in range(n):
         j = det_index[i]
-        if j < 0 or dclass[j] != LOW or t >= OFF:
-            continue
-        for o in range(n):
-            if o != i and 1.0 - overlap_cost(o, j, centre, wh, dxy, dwh, 0.0) > t:
-                out[i] = True
-                break
+        if j >= 0 and dclass[j] == LOW:
+            dsel[j] = True
+    if not dsel.any():
+        return out
+    ti, dj, _ = overlap_pairs(centre, wh, np.ones(n, np.bool_), dxy, dwh, dsel, 1.0 - t, 0.0)
+    count = np.zeros(m, np.intp)  # tracks whose predicted box overlaps detection j by ≥ t
+    first = np.full(m, -1, np.intp)  # the first of them
+    for e in range(ti.size):
+        if count[dj[e]] == 0:
+            first[dj[e]] = ti[e]
+        count[dj[e]] += 1
+    for i in range(n):
+        j = det_index[i]
+        if j >= 0 and dsel[j]:
+            out[i] = count[j] >= 2 or (count[j] == 1 and first[j] != i)
     return out
 
 
