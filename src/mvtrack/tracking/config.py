@@ -107,8 +107,8 @@ class TrackerConfig:
         A detection left over starts a track only if its box overlaps no live track's box by
         this IoU or more. None: every one left over starts a track.
     shared_iou : float or None
-        A weak box (under ``score_high``) that overlaps another track's predicted box by more
-        than this IoU is shared: its centre's std widens to the offset of two such boxes,
+        A weak box (under ``score_high``) that overlaps another track's predicted box by this
+        IoU or more is shared: its centre's std widens to the offset of two such boxes,
         ``(1 − t) / (1 + t)`` box sizes (:mod:`mvtrack.association.shared`). None: off.
     warmup : int
         The papers' presets: paper 1's warm-up gate centre ``2 y_k − y_{k−1}`` until a track
