@@ -92,8 +92,7 @@ def update_commit(
 
     ``speed2`` (2,): the velocity prior of a new track, (box sizes/s)² per axis;
     ``t_shared``: the overlap that makes a weak box shared (:mod:`mvtrack.association.shared`).
-    Returns the
-    next frame's IMM state and table and the outputs of
+    Returns the next frame's IMM state and table and the outputs of
     :func:`mvtrack.tracking.lifecycle.commit`.
     """
     z, zwh, zscore, rescued, held = measurements(det_index, dxy, dwh, cscore, found, found_xy)
