@@ -291,10 +291,7 @@ class Tracker:
             z, zwh, zscore, rescued, held = measurements(det_index, dets.xy, dets.wh,
                                                          pending.cscore, fmask, fxy)
             if n:
-                ps = self._update(ps, z, held, flo[:, WH],
-                                  shared(det_index, pending.centre, np.ascontiguousarray(
-                                      flo[:, WH]), dets.xy, dets.wh, pending.dclass,
-                                      self._t_shared))
+                ps = self._update(ps, z, held, np.ascontiguousarray(flo[:, WH]), pending)
             pos, vel = self.predictor.position(ps), self.predictor.velocity(ps)
             out = commit(ints, flo, det_index, rescued, z, zwh, zscore, pending.std,
                          pending.centre, np.ascontiguousarray(pos), np.ascontiguousarray(vel),
@@ -356,10 +353,13 @@ class Tracker:
             self.predictor.predict(ps, q[0])
 
     def _update(self, ps: Any, z: FloatArray, held: BoolArray, wh: FloatArray,
-                is_shared: BoolArray) -> Any:
+                pending: Pending) -> Any:
         """Measurement update of the held tracks (NaN rows of ``z`` keep the prediction);
         a shared box's noise is wider (:mod:`mvtrack.association.shared`)."""
         if self.scales:
+            d = pending.dets
+            is_shared = shared(pending.det_index, pending.centre, wh, d.xy, d.wh,
+                               pending.dclass, self._t_shared)
             r = measurement_var(self.config.measurement_noise, wh, is_shared, self._t_shared)
             return self.predictor.update(ps, z, held, r)
         return self.predictor.update(ps, z, held)
